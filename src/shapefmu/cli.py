@@ -1,0 +1,118 @@
+"""The ``shapefmu`` command line.
+
+    shapefmu design KIND --mode HZ[:ZETA] [--mode ...] [--vtol V] [--n N] [--json]
+    shapefmu sensitivity KIND --mode HZ[:ZETA] [--mode ...] [--vtol V] --plot out.png
+
+Modes are given in Hz on the command line (as a datasheet or an FFT gives them) and converted to
+rad/s for the Python API.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+
+import numpy as np
+
+from shapefmu import __version__
+from shapefmu.analysis import insensitivity, residual_vibration, sensitivity
+from shapefmu.shapers import KINDS, design
+
+
+def parse_mode(text: str) -> tuple[float, float]:
+    """``"2000"`` or ``"2000:0.01"`` (Hz, damping ratio) -> (omega rad/s, zeta)."""
+    hz_text, _, zeta_text = text.partition(":")
+    try:
+        hz = float(hz_text)
+        zeta = float(zeta_text) if zeta_text else 0.0
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"--mode must be HZ or HZ:ZETA, e.g. 2000:0.01, got {text!r}") from None
+    if not (math.isfinite(hz) and hz > 0):
+        raise argparse.ArgumentTypeError(f"--mode frequency must be > 0 Hz, got {hz_text!r}")
+    if not (math.isfinite(zeta) and 0 <= zeta < 1):
+        raise argparse.ArgumentTypeError(f"--mode damping ratio must be in [0, 1), got {zeta_text!r}")
+    return 2.0 * math.pi * hz, zeta
+
+
+def _add_design_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("kind", choices=KINDS, help="shaper design")
+    parser.add_argument(
+        "--mode", type=parse_mode, action="append", required=True, metavar="HZ[:ZETA]",
+        help="mode frequency in Hz and damping ratio; repeat for several modes",
+    )
+    parser.add_argument("--vtol", type=float, default=0.05, help="tolerable vibration of the EI family (default 0.05)")
+    parser.add_argument("--n", type=int, default=1, help="derivative order of zv_dn (0 = ZV, 1 = ZVD, ...)")
+
+
+def _design(args):
+    return design(args.kind, args.mode, vtol=args.vtol, n=args.n)
+
+
+def _cmd_design(args) -> int:
+    shaper = _design(args)
+    residuals = [residual_vibration(shaper, w, z) for w, z in args.mode]
+    if args.json:
+        record = json.loads(shaper.to_json())
+        record["modes"] = [{"omega": w, "zeta": z, "residual": r} for (w, z), r in zip(args.mode, residuals)]
+        print(json.dumps(record, indent=2))
+        return 0
+    print(f"{args.kind} shaper, {len(shaper)} impulses, duration {shaper.duration:.6g} s")
+    print(f"{'time [s]':>14}  {'amplitude':>10}")
+    for t, a in zip(shaper.times, shaper.amplitudes):
+        print(f"{t:14.6e}  {a:10.6f}")
+    for (w, z), r in zip(args.mode, residuals):
+        print(f"mode {w / (2 * math.pi):g} Hz, zeta {z:g}: residual vibration {100 * r:.3g} %")
+    return 0
+
+
+def _cmd_sensitivity(args) -> int:
+    shaper = _design(args)
+    q = np.linspace(0.0, args.q_max, 1201)
+    curves = []
+    for w, z in args.mode:
+        label = f"{w / (2 * math.pi):g} Hz, zeta {z:g}"
+        curves.append((label, sensitivity(shaper, w, z, q)))
+        try:
+            band = insensitivity(shaper, w, z, args.vtol)
+            print(f"{label}: V <= {100 * args.vtol:g} % for q in [{band.q_low:.4f}, {band.q_high:.4f}], I = {band.width:.4f}")
+        except ValueError as error:
+            print(f"{label}: {error}")
+    if args.plot:
+        from shapefmu.plots import plot_sensitivity
+
+        path = plot_sensitivity([(f"{args.kind}, {label}", c) for label, c in curves], args.plot, vtol=args.vtol)
+        print(f"sensitivity plot written to {path}")
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="shapefmu", description=__doc__.splitlines()[0])
+    parser.add_argument("--version", action="version", version=f"shapefmu {__version__}")
+    commands = parser.add_subparsers(dest="command", required=True)
+
+    p = commands.add_parser("design", help="design an impulse shaper and print its impulses")
+    _add_design_arguments(p)
+    p.add_argument("--json", action="store_true", help="print the design as JSON")
+    p.set_defaults(run=_cmd_design)
+
+    p = commands.add_parser("sensitivity", help="residual vibration against frequency error")
+    _add_design_arguments(p)
+    p.add_argument("--q-max", type=float, default=2.0, help="largest frequency ratio plotted (default 2)")
+    p.add_argument("--plot", metavar="PNG", help="save the sensitivity curve to this file")
+    p.set_defaults(run=_cmd_sensitivity)
+    return parser
+
+
+def main(argv=None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return args.run(args)
+    except ValueError as error:
+        parser.exit(2, f"shapefmu {args.command}: error: {error}\n")
+
+
+if __name__ == "__main__":
+    sys.exit(main())

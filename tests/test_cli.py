@@ -1,0 +1,47 @@
+"""The command line prints what the design layer computes, and refuses bad input clearly."""
+
+import json
+import math
+
+import pytest
+
+from shapefmu.cli import main
+from shapefmu.shapers import simultaneous
+
+
+def test_design_json_is_the_simultaneous_shaper(capsys):
+    assert main(["design", "simultaneous", "--mode", "2000:0.01", "--mode", "3000:0.01", "--json"]) == 0
+    record = json.loads(capsys.readouterr().out)
+    want = simultaneous([(2 * math.pi * 2000, 0.01), (2 * math.pi * 3000, 0.01)])
+    assert record["times"] == pytest.approx(want.times, rel=1e-12)
+    assert record["amplitudes"] == pytest.approx(want.amplitudes, rel=1e-12)
+    assert all(mode["residual"] < 1e-9 for mode in record["modes"])
+
+
+def test_design_table_lists_every_impulse(capsys):
+    assert main(["design", "zvd", "--mode", "10"]) == 0
+    rows = [line.split() for line in capsys.readouterr().out.splitlines() if line.strip()[:1].isdigit()]
+    assert [float(a) for _, a in rows] == pytest.approx([0.25, 0.5, 0.25], abs=1e-6)
+    assert [float(t) for t, _ in rows] == pytest.approx([0.0, 0.05, 0.1], abs=1e-9)
+
+
+def test_sensitivity_writes_a_png_and_reports_the_band(tmp_path, capsys):
+    out = tmp_path / "curve.png"
+    assert main(["sensitivity", "zv", "--mode", "1", "--plot", str(out)]) == 0
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert f"I = {4 * math.asin(0.05) / math.pi:.4f}" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["design", "zv", "--mode", "-5"], "--mode frequency must be > 0 Hz"),
+        (["design", "zv", "--mode", "5:1.5"], "--mode damping ratio must be in [0, 1)"),
+        (["design", "ei", "--mode", "5", "--vtol", "2"], "vtol must be in (0, 1), got 2.0"),
+    ],
+)
+def test_bad_input_exits_2_naming_the_parameter(argv, message, capsys):
+    with pytest.raises(SystemExit) as exit_info:
+        main(argv)
+    assert exit_info.value.code == 2
+    assert message in capsys.readouterr().err
