@@ -45,3 +45,20 @@ def test_bad_input_exits_2_naming_the_parameter(argv, message, capsys):
         main(argv)
     assert exit_info.value.code == 2
     assert message in capsys.readouterr().err
+
+
+def test_design_window_filter_reports_paper_length_and_zero_residual(capsys):
+    # omega = 1 rad/s, zeta = 0.2 and the default ts = pi/(100 omega_d): Hanning M = 400 (paper 000).
+    assert main(["design", "hanning", "--mode", f"{1 / (2 * math.pi)}:0.2"]) == 0
+    out = capsys.readouterr().out
+    assert "401 taps" in out
+    assert float(out.split("residual vibration ")[1].split(" %")[0]) < 1e-7
+
+
+def test_profile_reaches_the_distance_at_the_papers_slew_speed(capsys):
+    argv = ["profile", "M-BC:TZ:TP", "--mode", f"{3.5 / (2 * math.pi)}", "--distance", "1.7", "--speed", "0.7",
+            "--delta-omega", "0.05", "--json"]
+    assert main(argv) == 0
+    profile = json.loads(capsys.readouterr().out)
+    assert profile["position"][-1] == pytest.approx(1.7, rel=1e-9)
+    assert max(profile["velocity"]) == pytest.approx(0.4735, abs=5e-5)

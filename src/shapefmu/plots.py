@@ -51,3 +51,19 @@ def _save(fig, path) -> Path:
     fig.savefig(path, dpi=120)
     plt.close(fig)
     return path
+
+
+def plot_motion_profile(profile, path, title: str = "") -> Path:
+    """Acceleration, velocity and position of a rest-to-rest profile on a shared time axis."""
+    fig, axes = plt.subplots(3, 1, figsize=(7, 6), sharex=True)
+    for ax, values, label in zip(
+        axes,
+        (profile.acceleration, profile.velocity, profile.position),
+        ("acceleration", "velocity", "position"),
+    ):
+        ax.plot(profile.t[: len(values)], values)
+        ax.set_ylabel(label)
+        ax.grid(alpha=0.3)
+    axes[0].set_title(title)
+    axes[-1].set_xlabel("time [s]")
+    return _save(fig, path)

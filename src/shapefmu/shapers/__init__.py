@@ -1,4 +1,4 @@
-"""Shaper designs: impulse shapers (closed form and numerically solved) and sampled shapers.
+"""Shaper designs: impulse shapers, window shape filters, twin-pulse and time-frequency profiles.
 
 Single-mode designs share one signature, ``design(omega, zeta, ...)`` with omega in rad/s;
 multi-mode designs take a sequence of ``(omega, zeta)`` modes.
@@ -8,21 +8,82 @@ from shapefmu.shapers.catalog import KINDS, design
 from shapefmu.shapers.ei import ei, ei2, ei3
 from shapefmu.shapers.impulse import ImpulseShaper, mzv, um_zv, zv, zv_dn, zvd, zvdd
 from shapefmu.shapers.multimode import check_modes, convolve_modes, simultaneous
+from shapefmu.shapers.profile import MotionProfile, velocity_profile
 from shapefmu.shapers.sampled import SampledShaper
+from shapefmu.shapers.time_frequency import (
+    TimeFrequencyProfile,
+    energy_leakage,
+    optimal_scale,
+    time_frequency_profile,
+    tradeoff_curve,
+)
+from shapefmu.shapers.twin_pulse import (
+    TWIN_PULSE_PROFILES,
+    TwinPulseProfile,
+    bc_tz,
+    bc_vr,
+    m_bc_tp,
+    m_bc_tz,
+    m_bc_tz_tp,
+    m_tp_bc,
+    m_tp_tz_bc,
+    m_tz_bc,
+    tp,
+    tp_bc,
+)
+from shapefmu.shapers.window import (
+    WINDOW_FILTERS,
+    blackman_filter,
+    convolved_filter,
+    differenced_filter,
+    hamming_filter,
+    hamming_null_depth,
+    hanning_filter,
+    rectangle_filter,
+    three_hanning_filter,
+)
 
 __all__ = [
     "KINDS",
+    "TWIN_PULSE_PROFILES",
+    "WINDOW_FILTERS",
     "ImpulseShaper",
+    "MotionProfile",
     "SampledShaper",
+    "TimeFrequencyProfile",
+    "TwinPulseProfile",
+    "bc_tz",
+    "bc_vr",
+    "blackman_filter",
     "check_modes",
     "convolve_modes",
+    "convolved_filter",
     "design",
+    "differenced_filter",
     "ei",
     "ei2",
     "ei3",
+    "energy_leakage",
+    "hamming_filter",
+    "hamming_null_depth",
+    "hanning_filter",
+    "m_bc_tp",
+    "m_bc_tz",
+    "m_bc_tz_tp",
+    "m_tp_bc",
+    "m_tp_tz_bc",
+    "m_tz_bc",
     "mzv",
+    "optimal_scale",
+    "rectangle_filter",
     "simultaneous",
+    "three_hanning_filter",
+    "time_frequency_profile",
+    "tp",
+    "tp_bc",
+    "tradeoff_curve",
     "um_zv",
+    "velocity_profile",
     "zv",
     "zv_dn",
     "zvd",

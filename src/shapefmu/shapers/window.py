@@ -1,0 +1,389 @@
+"""Vibration-suppression shape filters generated from window functions (Zhou & Misawa, paper 000).
+
+A finite base sequence ``h[k]`` whose discrete-time Fourier transform vanishes at the damped
+frequency, ``H(omega_d Ts) = 0``, becomes a shape filter for the mode (omega_n, zeta) by damping
+compensation and normalisation (paper 000, Conclusion 2.1 and section 3):
+
+    f[k] = h[k] e^{-zeta omega_n k Ts} / sum_m h[m] e^{-zeta omega_n m Ts},
+
+and a filter of robustness order n is the n-fold self-convolution of ``f`` (eq. 1), whose spectrum
+is ``F^n``. The residual vibration of the mode after ``f`` is proportional to
+``|sum_k f[k] e^{(zeta omega_n + j omega_d) k Ts}| = |H(omega_d Ts)| / sum_m h[m] e^{-zeta omega_n m Ts}``,
+which is why the null of the *base* window is all that matters, for any damping.
+
+Every design function has the signature ``name(omega_n, zeta, ts, order=1, *, adjust_ts=False, ...)``
+and returns a ``SampledShaper``. The window length M follows from ``omega_d * ts`` and must be an
+integer: with ``adjust_ts=False`` a ``ts`` that does not make M an integer raises ValueError naming
+the nearest valid sampling periods; with ``adjust_ts=True`` the nearest valid ``ts`` is used and
+reported as the shaper's ``ts``. M is never rounded silently.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from shapefmu.runtime.checks import check_count, check_finite, check_omega, check_positive, check_zeta
+from shapefmu.shapers.sampled import SampledShaper
+
+# Relative tolerance on ts for "M is an integer": ts given to ~10 significant digits is accepted.
+_TS_RTOL = 1e-9
+
+
+# --- shared guards ---------------------------------------------------------------------------
+
+
+def _damped(omega_n, zeta):
+    """Validated (omega_n, zeta, omega_d) of the design point."""
+    omega_n = check_omega(omega_n, "omega_n")
+    zeta = check_zeta(zeta)
+    return omega_n, zeta, omega_n * math.sqrt(1.0 - zeta * zeta)
+
+
+def _length(omega_d, ts, adjust_ts, m_of_ts, ts_of_m, minimum, formula):
+    """The integer window length M for ``ts``, and the ts actually used.
+
+    ``m_of_ts`` gives the real M for a sampling period, ``ts_of_m`` its inverse; ``minimum`` is the
+    shortest window whose null is the design null (below it the null aliases onto a pole of the
+    window's transform). ``formula`` names the relation in error messages.
+    """
+    ts = check_positive(ts, "ts")
+    m_real = m_of_ts(omega_d * ts)
+    candidates = sorted({max(minimum, math.floor(m_real)), max(minimum, math.ceil(m_real))})
+    nearest = min(candidates, key=lambda m: abs(ts_of_m(m) / omega_d - ts))
+    ts_nearest = ts_of_m(nearest) / omega_d
+    if abs(ts_nearest - ts) <= _TS_RTOL * ts:
+        return nearest, ts
+    if adjust_ts:
+        return nearest, ts_nearest
+    options = ", ".join(f"{ts_of_m(m) / omega_d:.10g} s (M = {m})" for m in candidates)
+    raise ValueError(
+        f"ts = {ts!r} s gives M = {formula} = {m_real:.6g}, which is not an integer; valid ts make M an "
+        f"integer >= {minimum}, the nearest are {options}; or pass adjust_ts=True"
+    )
+
+
+def _shape(h, omega_n, zeta, ts, order):
+    """Damping compensation and normalisation (paper 000, section 3), then order n by eq. (1)."""
+    order = check_count(order, "order", 1)
+    k = np.arange(h.size)
+    f = h * np.exp(-zeta * omega_n * k * ts)
+    f = f / f.sum()
+    out = f
+    for _ in range(order - 1):
+        out = np.convolve(out, f)
+    return SampledShaper(out, ts)
+
+
+def _cosine_window(m, coefficients):
+    """sum_i c_i cos(2 pi i k / M), k = 0..M (eq. 2 and the Blackman/Hamming forms)."""
+    k = np.arange(m + 1)
+    return sum(c * np.cos(2.0 * math.pi * i * k / m) for i, c in enumerate(coefficients))
+
+
+# Base windows of paper 000: (coefficients of cos(2 pi i k/M), null at omega_d Ts = 2 pi m0 / M,
+# smallest M). The null of a generalised cosine window of M + 1 samples whose end samples are zero
+# sits on every DFT bin 2 pi m / M with m beyond its last cosine term; m0 is the first of them.
+_COSINE_WINDOWS = {
+    "hanning": ((0.5, -0.5), 2, 4),  # eq. (2): M = 4 pi / (omega_d Ts)
+    "blackman": ((0.42, -0.5, 0.08), 3, 6),  # section 4: M = 6 pi / (omega_d Ts)
+    "hamming": ((25.0 / 46.0, -21.0 / 46.0), 2, 4),  # section 5: approximate null only
+}
+
+
+def _cosine_base(name, omega_d, ts, adjust_ts):
+    coefficients, m0, minimum = _COSINE_WINDOWS[name]
+    m, ts = _length(
+        omega_d,
+        ts,
+        adjust_ts,
+        lambda u: 2.0 * math.pi * m0 / u,
+        lambda m: 2.0 * math.pi * m0 / m,
+        minimum,
+        f"{2 * m0}*pi/(omega_d*ts)",
+    )
+    return _cosine_window(m, coefficients), ts
+
+
+def _base(base, omega_d, ts, adjust_ts):
+    """A symmetric base g[k] with G(omega_d Ts) = 0, for the non-symmetric constructions (section 8)."""
+    if base == "rectangle":
+        m, ts = _rectangle_length(omega_d, ts, adjust_ts)
+        return np.ones(m), ts
+    if base in ("hanning", "blackman"):
+        return _cosine_base(base, omega_d, ts, adjust_ts)
+    raise ValueError(f"base must be one of 'rectangle', 'hanning', 'blackman', got {base!r}")
+
+
+def _rectangle_length(omega_d, ts, adjust_ts):
+    # M equal samples k = 0..M-1 null every bin 2 pi m / M, m >= 1 (Zhou & Misawa 2005a).
+    return _length(
+        omega_d, ts, adjust_ts, lambda u: 2.0 * math.pi / u, lambda m: 2.0 * math.pi / m, 2, "2*pi/(omega_d*ts)"
+    )
+
+
+# --- designs ---------------------------------------------------------------------------------
+
+
+def rectangle_filter(omega_n, zeta, ts, order=1, *, adjust_ts=False) -> SampledShaper:
+    """Rectangle-window shape filter: M equal samples, M = 2 pi / (omega_d Ts).
+
+    Parameters
+    ----------
+    omega_n : float
+        Natural frequency of the mode to suppress, rad/s.
+    zeta : float
+        Damping ratio in [0, 1).
+    ts : float
+        Sampling period, s. M must come out an integer (see ``adjust_ts``).
+    order : int
+        Robustness order n >= 1: the n-fold self-convolution of eq. (1).
+    adjust_ts : bool
+        Use the nearest ts that makes M an integer instead of raising ValueError.
+
+    Returns
+    -------
+    SampledShaper
+        Taps f_n[k] summing to 1, with the ts actually used.
+
+    Notes
+    -----
+    h[k] = 1 for 0 <= k <= M - 1 (Zhou & Misawa 2005a, recalled in paper 000 section 1); its
+    transform vanishes at omega = 2 pi / M. With ts = pi / omega_d (M = 2) the filter is the ZV
+    shaper: Input Shaping is a special case of the rectangle filter.
+
+    References
+    ----------
+    L. Zhou, E. A. Misawa, "Vibration suppression shape filter generation from window functions",
+    IFAC 2005 (paper 000), sections 1-3.
+
+    Examples
+    --------
+    >>> import math
+    >>> rectangle_filter(1.0, 0.0, math.pi / 100).taps.size
+    200
+    """
+    omega_n, zeta, omega_d = _damped(omega_n, zeta)
+    m, ts = _rectangle_length(omega_d, ts, adjust_ts)
+    return _shape(np.ones(m), omega_n, zeta, ts, order)
+
+
+def hanning_filter(omega_n, zeta, ts, order=1, *, adjust_ts=False) -> SampledShaper:
+    """Hanning-window shape filter, M = 4 pi / (omega_d Ts) (paper 000, eq. 2, section 3).
+
+    Parameters are those of :func:`rectangle_filter`.
+
+    Notes
+    -----
+    h[k] = 0.5 - 0.5 cos(2 pi k / M), 0 <= k <= M (eq. 2). Its first and last samples are zero, so
+    the filter is also a velocity profile (Fig. 4; :func:`shapefmu.shapers.profile.velocity_profile`).
+
+    References
+    ----------
+    Paper 000, section 3, eq. (1)-(2).
+
+    Examples
+    --------
+    >>> import math
+    >>> hanning_filter(1.0, 0.0, math.pi / 100).taps.size  # M + 1 with M = 400
+    401
+    """
+    omega_n, zeta, omega_d = _damped(omega_n, zeta)
+    h, ts = _cosine_base("hanning", omega_d, ts, adjust_ts)
+    return _shape(h, omega_n, zeta, ts, order)
+
+
+def blackman_filter(omega_n, zeta, ts, order=1, *, adjust_ts=False) -> SampledShaper:
+    """Blackman-window shape filter, M = 6 pi / (omega_d Ts) (paper 000, section 4).
+
+    Parameters are those of :func:`rectangle_filter`.
+
+    Notes
+    -----
+    h[k] = 0.42 - 0.5 cos(2 pi k / M) + 0.08 cos(4 pi k / M), 0 <= k <= M. (The OCR of section 4
+    reads ``cos(2 pi n / M)`` in the second term; the index is k.) Zero at both ends, so it is also
+    a velocity profile.
+
+    References
+    ----------
+    Paper 000, section 4.
+    """
+    omega_n, zeta, omega_d = _damped(omega_n, zeta)
+    h, ts = _cosine_base("blackman", omega_d, ts, adjust_ts)
+    return _shape(h, omega_n, zeta, ts, order)
+
+
+def hamming_filter(omega_n, zeta, ts, order=1, *, adjust_ts=False) -> SampledShaper:
+    """Hamming-window shape filter with an approximate null, M = 4 pi / (omega_d Ts) (section 5).
+
+    Parameters are those of :func:`rectangle_filter`. The residual vibration at the design point is
+    not zero; :func:`hamming_null_depth` tells how small it is.
+
+    Notes
+    -----
+    h[k] = 25/46 - 21/46 cos(2 pi k / M), 0 <= k <= M. The paper states H(omega) = 0 has no
+    solution. The M samples k = 0..M-1 span whole periods and vanish at 4 pi / M; what remains is
+    the end sample h[M] = 2/23, so |H(4 pi / M)| = 2/23 exactly against H(0) = (25 M + 4) / 46.
+
+    References
+    ----------
+    Paper 000, section 5.
+    """
+    omega_n, zeta, omega_d = _damped(omega_n, zeta)
+    h, ts = _cosine_base("hamming", omega_d, ts, adjust_ts)
+    return _shape(h, omega_n, zeta, ts, order)
+
+
+def hamming_null_depth(omega_n, zeta, ts, *, adjust_ts=False) -> float:
+    """|H(omega_d Ts)| / H(0) of the Hamming base window: how far its approximate null is from 0.
+
+    Equals 4 / (25 M + 4) (see :func:`hamming_filter`); for zeta = 0 this is also the percent
+    residual vibration of the order-1 Hamming filter at the design point.
+    """
+    _, _, omega_d = _damped(omega_n, zeta)
+    h, ts = _cosine_base("hamming", omega_d, ts, adjust_ts)
+    k = np.arange(h.size)
+    return float(abs(np.sum(h * np.exp(-1j * omega_d * ts * k))) / h.sum())
+
+
+def _three_hanning_u(m, c):
+    """omega_d Ts for an integer M (section 7).
+
+    The OCR prints ``omega_d Ts = [2 cos^2(pi/M)(C+1) + 2C cos(pi/M) - 1] / [2C cos(pi/M) + 2C + 1]``;
+    the right side is cos(omega_d Ts) (it is what eq. (6) inverts, and it is the null of the base
+    computed numerically). Written as 2 arcsin(...) because 1 - cos loses digits for large M:
+    1 - cos(omega_d Ts) = 2 (C+1) sin^2(pi/M) / (2C cos(pi/M) + 2C + 1).
+    """
+    x = math.cos(math.pi / m)
+    return 2.0 * math.asin(math.sin(math.pi / m) * math.sqrt((c + 1.0) / (2.0 * c * x + 2.0 * c + 1.0)))
+
+
+def _three_hanning_m(u, c):
+    """Eq. (6): M = pi / arccos[(C cos u - C + sqrt(B)) / (2C + 2)], u = omega_d Ts."""
+    y = math.cos(u)
+    b = c * c * y * y + 2 * c * c * y + c * c + 2 * c + 6 * c * y + 2 + 2 * y
+    return math.pi / math.acos(min(1.0, (c * y - c + math.sqrt(b)) / (2 * c + 2)))
+
+
+def three_hanning_filter(omega_n, zeta, ts, order=1, *, c=0.25, adjust_ts=False) -> SampledShaper:
+    """Shape filter from the sum of three Hanning windows with weight C (paper 000, section 7, eq. 6).
+
+    Parameters are those of :func:`rectangle_filter`, plus
+
+    c : float
+        The weight C >= 0 of the two short Hanning windows (paper's Fig. 6 uses 0.25).
+
+    Notes
+    -----
+    h = h_s1 + h_s2 + h_s3 on 0 <= k <= 2M: one Hanning of length 2M and C times two Hanning windows
+    of length M placed end to end, i.e. h[k] = 1/2 - 1/2 cos(pi k / M) + C [1/2 - 1/2 cos(2 pi k / M)].
+    Its null lies between DFT bins and M follows from eq. (6); see ``_three_hanning_u`` for the
+    corrected forward relation.
+
+    References
+    ----------
+    Paper 000, section 7, eq. (6).
+    """
+    omega_n, zeta, omega_d = _damped(omega_n, zeta)
+    c = check_finite(c, "c")
+    if c < 0.0:
+        raise ValueError(f"c must be >= 0, got {c!r}")
+    m, ts = _length(
+        omega_d,
+        ts,
+        adjust_ts,
+        lambda u: _three_hanning_m(u, c),
+        lambda m: _three_hanning_u(m, c),
+        2,
+        "eq. (6) of paper 000",
+    )
+    k = np.arange(2 * m + 1)
+    h = 0.5 - 0.5 * np.cos(math.pi * k / m) + c * (0.5 - 0.5 * np.cos(2.0 * math.pi * k / m))
+    return _shape(h, omega_n, zeta, ts, order)
+
+
+def differenced_filter(
+    omega_n, zeta, ts, order=1, *, k1=1.0, k2=-25.0, base="hanning", adjust_ts=False
+) -> SampledShaper:
+    """Non-symmetric shape filter h = k1 g + k2 dg from a base and its difference (section 8.1).
+
+    Parameters are those of :func:`rectangle_filter`, plus
+
+    k1, k2 : float
+        Weights of the base and of its first difference (paper: k1 = 1, k2 = -25).
+    base : {'hanning', 'blackman', 'rectangle'}
+        The symmetric base g with G(omega_d Ts) = 0.
+
+    Notes
+    -----
+    dg[k] = g[k] - g[k-1] on 0 <= k <= M + 1, so H(omega) = [k1 + k2 (1 - e^{-j omega})] G(omega)
+    keeps the null of G. The normalising sum runs over all M + 2 samples (the OCR's upper limit M
+    would drop the last one).
+
+    References
+    ----------
+    Paper 000, section 8.1, Figs. 8-9.
+    """
+    omega_n, zeta, omega_d = _damped(omega_n, zeta)
+    k1, k2 = check_finite(k1, "k1"), check_finite(k2, "k2")
+    g, ts = _base(base, omega_d, ts, adjust_ts)
+    padded = np.append(g, 0.0)
+    h = k1 * padded + k2 * np.diff(padded, prepend=0.0)
+    _check_gain(h, "k1")
+    return _shape(h, omega_n, zeta, ts, order)
+
+
+def convolved_filter(
+    omega_n, zeta, ts, order=1, *, k1=1.0, k2=1.0 / 125.0, k0=None, base="hanning", adjust_ts=False
+) -> SampledShaper:
+    """Non-symmetric shape filter h = k1 g[k - k0] + k2 (g * g)[k] (paper 000, section 8.2).
+
+    Parameters are those of :func:`rectangle_filter`, plus
+
+    k1, k2 : float
+        Weights of the delayed base and of its self-convolution (paper: k1 = 1, k2 = 1/125).
+    k0 : int, optional
+        Delay of the base in samples, 0 <= k0 <= M (the default M is the paper's example).
+    base : {'hanning', 'blackman', 'rectangle'}
+        The symmetric base g with G(omega_d Ts) = 0.
+
+    Notes
+    -----
+    H(omega) = k1 e^{-j omega k0} G(omega) + k2 G(omega)^2 vanishes with G. h spans 0..2M; the
+    normalising sum runs over all of it (the OCR's upper limit M is a slip).
+
+    References
+    ----------
+    Paper 000, section 8.2, Figs. 10-11.
+    """
+    omega_n, zeta, omega_d = _damped(omega_n, zeta)
+    k1, k2 = check_finite(k1, "k1"), check_finite(k2, "k2")
+    g, ts = _base(base, omega_d, ts, adjust_ts)
+    gg = np.convolve(g, g)
+    m = g.size - 1
+    k0 = m if k0 is None else check_count(k0, "k0", 0)
+    if k0 > gg.size - g.size:
+        raise ValueError(f"k0 must be an integer in [0, {gg.size - g.size}], got {k0!r}")
+    h = k2 * gg
+    h[k0 : k0 + g.size] += k1 * g
+    _check_gain(h, "k1")
+    return _shape(h, omega_n, zeta, ts, order)
+
+
+def _check_gain(h, name):
+    # The filter is normalised by the sum of its samples, which the weights can cancel.
+    if abs(h.sum()) <= 1e-9 * np.abs(h).sum():
+        raise ValueError(f"{name} and k2 make the base sum to 0; the filter cannot be normalised")
+
+
+#: Design functions by kind, for the command line (``shapefmu design KIND``).
+WINDOW_FILTERS = {
+    "rectangle": rectangle_filter,
+    "hanning": hanning_filter,
+    "blackman": blackman_filter,
+    "hamming": hamming_filter,
+    "three-hanning": three_hanning_filter,
+    "differenced": differenced_filter,
+    "convolved": convolved_filter,
+}
