@@ -4,7 +4,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from shapefmu.analysis import insensitivity, residual_vibration
@@ -172,7 +172,7 @@ def test_undamped_insensitivity_matches_published_values(shaper, expected):
 
 
 def test_three_hump_ei_beyond_its_existence_domain_says_so():
-    with pytest.raises(ValueError, match="3-hump EI shaper with vtol = 0.08 exists only up to zeta"):
+    with pytest.raises(ValueError, match="3-hump EI shaper with vtol = 0.08 could be followed only up to zeta = 0.2"):
         ei3(1.0, 0.3, 0.08)
 
 
@@ -266,6 +266,8 @@ def test_property_closed_form_shapers(omega, zeta, kind):
     kind=st.sampled_from(["ei", "ei2", "ei3"]),
 )
 def test_property_ei_shapers(omega, zeta, vtol, kind):
+    # The documented reach of the three-hump continuation (see shapers/ei.py).
+    assume(not (kind == "ei3" and 0.03 < vtol < 0.05 and zeta > 0.26))
     shaper = design(kind, [(omega, zeta)], vtol=vtol)
     assert math.isclose(shaper.gain, 1.0, abs_tol=1e-12)
     expected = 0.0 if kind == "ei2" else vtol

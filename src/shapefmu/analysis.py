@@ -120,14 +120,14 @@ def insensitivity(shaper, omega: float, zeta: float, vtol: float = 0.05, q_max: 
 
     A curve that touches vtol from below (the humps of EI shapers, exactly vtol by design) does not
     end the band: V is compared with vtol * (1 + 1e-7). The edges are then refined with Brent's
-    method on V - vtol. ``q_high`` is ``inf`` when the band provably never ends (with damping, the
-    residual of a shaper whose last impulse is below vtol dies out at high frequency). Raises
-    ValueError if V > vtol at the design point itself.
+    method on V - vtol. The scan starts on (0, q_max] and doubles q_max (up to 1000) while the band
+    is still open; ``q_high`` is ``inf`` when the band provably never ends (with damping, the
+    residual of a shaper whose impulses after the first are small dies out at high frequency).
+    Raises ValueError if V > vtol at the design point itself.
     """
     omega = check_positive(omega, "omega")
     vtol = check_vtol(vtol)
     q_max = check_positive(q_max, "q_max")
-    limit = vtol * (1.0 + 1e-7)
 
     def excess(q):
         return residual_vibration(shaper, q * omega, zeta) - vtol
@@ -136,27 +136,33 @@ def insensitivity(shaper, omega: float, zeta: float, vtol: float = 0.05, q_max: 
         raise ValueError(
             f"residual vibration at the design point is {excess(1.0) + vtol:.4g} > vtol = {vtol:g}: no band"
         )
-    # Scan outward from q = 1 on a grid fine enough to resolve the humps of multi-hump shapers,
-    # whose widths scale with 1/(omega * duration).
-    grid = np.linspace(1e-6, q_max, 20001)
-    v = residual_vibration(shaper, grid * omega, zeta)
-    inside = v <= limit
-    centre = int(np.searchsorted(grid, 1.0))
-    inside[centre] = True
-    lo = centre
-    while lo > 0 and inside[lo - 1]:
-        lo -= 1
-    hi = centre
-    while hi < grid.size - 1 and inside[hi + 1]:
-        hi += 1
-    q_low = 0.0 if lo == 0 else brentq(excess, grid[lo - 1], grid[lo], xtol=1e-12)
-    if hi < grid.size - 1:
-        q_high = brentq(excess, grid[hi], grid[hi + 1], xtol=1e-12)
-    elif _upper_bound(shaper, q_max * omega, zeta) <= vtol:
-        q_high = math.inf  # heavily damped: V can never climb back above vtol (see _upper_bound)
-    else:
-        raise ValueError(f"residual vibration stays below vtol up to q_max = {q_max:g}; raise q_max")
-    return InsensitiveBand(float(q_low), float(q_high))
+    q_low = _band_edge(excess, 1.0, 1e-6, vtol)
+    while True:
+        q_high = _band_edge(excess, 1.0, q_max, vtol)
+        if q_high is not None:
+            break
+        if _upper_bound(shaper, q_max * omega, zeta) <= vtol:
+            q_high = math.inf  # heavily damped: V can never climb back above vtol (see _upper_bound)
+            break
+        if q_max >= 1000.0:
+            raise ValueError(f"residual vibration stays below vtol up to q = {q_max:g} without a provable end")
+        q_max *= 2.0
+    return InsensitiveBand(0.0 if q_low is None else q_low, q_high)
+
+
+def _band_edge(excess, start, stop, vtol):
+    """Where V first exceeds vtol going from ``start`` to ``stop``, or None if it never does.
+
+    Scans a grid fine enough to resolve the humps of multi-hump shapers (20000 points), treating
+    V <= vtol (1 + 1e-7) as inside so that tangent humps do not end the band, then refines the
+    crossing with Brent's method.
+    """
+    grid = np.linspace(start, stop, 20001)
+    outside = np.flatnonzero(excess(grid) > vtol * 1e-7)
+    if outside.size == 0:
+        return None
+    k = outside[0]
+    return float(brentq(excess, grid[k - 1], grid[k], xtol=1e-12))
 
 
 def _upper_bound(shaper, omega, zeta) -> float:

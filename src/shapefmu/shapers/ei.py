@@ -26,10 +26,13 @@ exact; they start a continuation in zeta (steps of at most 0.02, halved where ne
 hybrid) follows to the requested damping. The result depends only on (N, zeta, vtol), so it is
 cached in dimensionless form and scaled by 1/omega.
 
-Where the shapers exist: for vtol <= 0.05 all three, for every zeta in [0, 0.3]. For larger vtol
-the multi-hump branches end earlier, because the outermost zero leaves for infinite frequency
-(measured on the continuation, steps of 0.02: three-hump vtol 0.08 up to zeta 0.22, vtol 0.1 up to
-0.20; two-hump vtol 0.1 up to 0.28, vtol 0.2 up to 0.20); beyond that ValueError says so.
+Where the continuation reaches (measured with steps of 0.01 in zeta): EI and two-hump EI for every
+zeta in [0, 0.3] with vtol <= 0.05; three-hump EI for every zeta in [0, 0.3] with vtol <= 0.03 and
+with vtol = 0.05, but for vtol in (0.03, 0.05) it stops between zeta = 0.27 and 0.29, where the
+constraint Jacobian turns singular. For larger vtol the multi-hump branches end earlier, because
+the outermost zero leaves for infinite frequency (three-hump vtol 0.08 up to zeta 0.22, vtol 0.1
+up to 0.20; two-hump vtol 0.1 up to 0.28, vtol 0.2 up to 0.20). Beyond its reach ValueError says
+how far the continuation got.
 """
 
 from __future__ import annotations
@@ -175,9 +178,9 @@ def _dimensionless(humps: int, zeta: float, vtol: float):
             step /= 2
         else:
             raise ValueError(
-                f"the {humps}-hump EI shaper with vtol = {vtol:g} exists only up to zeta = {done:.3g} "
-                f"(asked for {zeta:g}): beyond it the curve loses a zero or hump; with vtol <= 0.05 "
-                "it exists for every zeta in [0, 0.3]"
+                f"the {humps}-hump EI shaper with vtol = {vtol:g} could be followed only up to "
+                f"zeta = {done:.3g} (asked for {zeta:g}): its constraints turn singular there; the "
+                "default vtol = 0.05 reaches every zeta in [0, 0.3]"
             )
     n = humps + 2
     tau = np.concatenate([[0.0], x[n : 2 * n - 1]])
