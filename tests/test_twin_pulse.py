@@ -66,7 +66,10 @@ def test_ten_pendula_null_index_is_2_and_slew_is_04735():
     assert design.slew_speed == pytest.approx(0.4735, abs=5e-5)
 
 
-def test_ten_pendula_expanded_profile_leaves_at_most_3_percent_of_classic_swing():
+def test_ten_pendula_expanded_profile_leaves_under_3_percent_of_one_sample_pulse_twin_pulse():
+    # The classic TP here has one-sample (1 ms) pulses. Paper 003 built its classic pulses from
+    # boxcars of unstated width; pulses of ~1.45 s reproduce its 0.374 deg and give a ratio of
+    # ~4.3 % (the paper's own 0.012 / 0.374 is 3.2 %), so this is not yet the paper's comparison.
     expanded = simulated_swing_deg(m_bc_tz_tp(WN, D, V, delta_omega=DW, ts=1e-3).profile, PENDULA)
     classic = simulated_swing_deg(tp(WN, D, V, ts=1e-3).profile, PENDULA)
     print(f"max residual swing: classic TP {classic.max():.4f} deg, M-BC:TZ:TP {expanded.max():.5f} deg")
