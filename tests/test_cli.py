@@ -62,3 +62,10 @@ def test_profile_reaches_the_distance_at_the_papers_slew_speed(capsys):
     profile = json.loads(capsys.readouterr().out)
     assert profile["position"][-1] == pytest.approx(1.7, rel=1e-9)
     assert max(profile["velocity"]) == pytest.approx(0.4735, abs=5e-5)
+
+
+def test_plant_show_lists_the_disk_drive_modes_of_table_1(capsys):
+    assert main(["plant", "show", "models/disk_drive.toml"]) == 0
+    rows = [line.split() for line in capsys.readouterr().out.splitlines()]
+    modes = [(float(r[0]), float(r[2])) for r in rows if len(r) >= 4 and r[0] in ("2000", "3000")]
+    assert modes == [(2000.0, 0.01), (3000.0, 0.01)]

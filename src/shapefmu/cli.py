@@ -4,6 +4,8 @@
     shapefmu design WINDOW --mode HZ[:ZETA] [--order N] [--ts S] [--adjust-ts] [--json]
     shapefmu sensitivity KIND --mode HZ[:ZETA] [--mode ...] [--vtol V] --plot out.png
     shapefmu profile KIND --mode HZ[:ZETA] --distance D --speed V [--plot out.png] [--json]
+    shapefmu plant show models/disk_drive.toml
+    shapefmu optimal models/disk_drive.toml --distance X [--u-max U] [--plot out.png]
 
 Modes are given in Hz on the command line (as a datasheet or an FFT gives them) and converted to
 rad/s for the Python API.
@@ -153,6 +155,20 @@ def _cmd_profile(args) -> int:
     return 0
 
 
+def _cmd_plant_show(args) -> int:
+    from shapefmu.plants import describe
+
+    print(describe(args.file))
+    return 0
+
+
+def _cmd_optimal(args) -> int:
+    from shapefmu.optimal import optimal_report
+
+    print(optimal_report(args.file, args.distance, u_max=args.u_max, plot=args.plot))
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="shapefmu", description=__doc__.splitlines()[0])
     parser.add_argument("--version", action="version", version=f"shapefmu {__version__}")
@@ -182,6 +198,19 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--plot", metavar="PNG", help="save acceleration, velocity and position to this file")
     p.add_argument("--json", action="store_true", help="print the sampled profile as JSON")
     p.set_defaults(run=_cmd_profile)
+
+    p = commands.add_parser("plant", help="plant models (models/*.toml)")
+    plant_commands = p.add_subparsers(dest="plant_command", required=True)
+    q = plant_commands.add_parser("show", help="print a plant model's signals, parameters and modes")
+    q.add_argument("file", help="plant model file, e.g. models/disk_drive.toml")
+    q.set_defaults(run=_cmd_plant_show)
+
+    p = commands.add_parser("optimal", help="time-optimal move beside the rigid and shaped bang-bang moves")
+    p.add_argument("file", help="plant model file, e.g. models/disk_drive.toml")
+    p.add_argument("--distance", type=float, required=True, help="move distance of the plant's first output")
+    p.add_argument("--u-max", type=float, default=None, help="input limit (default: the input's limit in the file)")
+    p.add_argument("--plot", metavar="PNG", help="save u(t) of every move and the outputs of the optimal move")
+    p.set_defaults(run=_cmd_optimal)
     return parser
 
 

@@ -1,0 +1,33 @@
+"""Plant models: linear models with named signals and physical parameters (``Plant``), the plants
+of the papers (``library``) and the declarative model files of ``models/`` (``loader``)."""
+
+from shapefmu.plants.library import (
+    disk_drive,
+    linear_synchronous_motor,
+    mass_spring_chain,
+    pendula,
+    rigid_flexible,
+    ten_pendula,
+    transfer_function,
+)
+from shapefmu.plants.loader import KINDS, describe, load, loads
+from shapefmu.plants.model import Mode, Parameter, Plant, as_plant, rigid_part
+
+__all__ = [
+    "KINDS",
+    "Mode",
+    "Parameter",
+    "Plant",
+    "as_plant",
+    "describe",
+    "disk_drive",
+    "linear_synchronous_motor",
+    "load",
+    "loads",
+    "mass_spring_chain",
+    "pendula",
+    "rigid_flexible",
+    "rigid_part",
+    "ten_pendula",
+    "transfer_function",
+]

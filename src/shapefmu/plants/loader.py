@@ -1,0 +1,220 @@
+"""Plant model files: declarative, tool-neutral TOML read with the standard library's ``tomllib``.
+
+A file names a ``kind`` (one constructor of ``shapefmu.plants.library``), its ``parameters`` each
+with a value and a unit, its ``inputs`` (unit and optional actuator limit ``max``) and its
+``outputs`` (unit), in the order the kind defines them::
+
+    name = "disk_drive"
+    kind = "rigid_flexible"
+    [parameters]
+    b2 = { value = 2.7e3, unit = "1/(V*s^2)" }
+    f = { value = [2.0e3, 3.0e3], unit = "Hz" }
+    ...
+    [inputs]
+    voltage = { unit = "V", max = 11.0 }
+    [outputs]
+    position = { unit = "rad" }
+
+The plant-FMU generator reads the same files, so nothing here is specific to Python beyond the
+constructors the kinds map to.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import tomllib
+from dataclasses import dataclass
+
+from shapefmu.plants import library
+from shapefmu.plants.model import Parameter, Plant
+
+
+@dataclass(frozen=True)
+class _Spec:
+    """A parameter of a kind: whether it is a list, required, and the units it may be given in
+    with their factor to the unit the constructor takes (None: any non-empty unit is accepted)."""
+
+    array: bool
+    required: bool = True
+    units: dict | None = None
+
+
+_FREQUENCY = {"Hz": 2.0 * math.pi, "rad/s": 1.0}
+_LENGTH = {"m": 1.0, "in": library.INCH, "mm": 1e-3}
+
+# Per kind: parameter specs, and the builder taking the converted values (and the file's name).
+_KINDS = {
+    "rigid_flexible": {
+        "b2": _Spec(False),
+        "f": _Spec(True, units=_FREQUENCY),
+        "zeta": _Spec(True, units={"1": 1.0}),
+        "b4": _Spec(True),
+        "rigid_damping": _Spec(False, required=False, units={"1/s": 1.0}),
+    },
+    # Paper 002, Sec. I and Fig. 5: back EMF damps the rigid body by Kt^2/(R J).
+    "voice_coil_flexible": {
+        "b2": _Spec(False),
+        "Kt": _Spec(False, units={"N*m/A": 1.0}),
+        "R": _Spec(False, units={"ohm": 1.0}),
+        "J": _Spec(False, units={"kg*m^2": 1.0}),
+        "f": _Spec(True, units=_FREQUENCY),
+        "zeta": _Spec(True, units={"1": 1.0}),
+        "b4": _Spec(True),
+    },
+    "transfer_function": {"num": _Spec(True), "den": _Spec(True)},
+    "pendula": {
+        "lengths": _Spec(True, units=_LENGTH),
+        "g": _Spec(False, required=False, units={"m/s^2": 1.0}),
+        "zeta": _Spec(False, required=False, units={"1": 1.0}),
+    },
+    "mass_spring_chain": {
+        "masses": _Spec(True, units={"kg": 1.0}),
+        "springs": _Spec(True, units={"N/m": 1.0}),
+        "dampers": _Spec(True, required=False, units={"N*s/m": 1.0}),
+    },
+}
+KINDS = tuple(_KINDS)
+
+
+def _build(kind: str, p: dict, name: str, input_name: str, u_max) -> Plant:
+    if kind in ("rigid_flexible", "voice_coil_flexible"):
+        lengths = {len(p["f"]), len(p["zeta"]), len(p["b4"])}
+        if len(lengths) != 1:
+            raise ValueError(f"parameters f, zeta and b4 must have one entry per mode, got lengths "
+                             f"{len(p['f'])}, {len(p['zeta'])}, {len(p['b4'])}")
+        damping = p["Kt"] ** 2 / (p["R"] * p["J"]) if kind == "voice_coil_flexible" else p.get("rigid_damping", 0.0)
+        plant = library.rigid_flexible(p["b2"], list(zip(p["f"], p["zeta"], p["b4"])), damping, u_max=u_max,
+                                       name=name, input_name=input_name)
+        return plant
+    if kind == "transfer_function":
+        return library.transfer_function(p["num"], p["den"], name=name, input_name=input_name)
+    if kind == "pendula":
+        return library.pendula(p["lengths"], p.get("g", library.STANDARD_GRAVITY), p.get("zeta", 0.0), name=name)
+    return library.mass_spring_chain(p["masses"], p["springs"], p.get("dampers"), name=name)
+
+
+def _finite(value, where):
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise ValueError(f"{where} must be a finite number, got {value!r}")
+    return float(value)
+
+
+def _parameter(raw, spec: _Spec, where: str):
+    """(converted value for the constructor, Parameter as written in the file)."""
+    if not isinstance(raw, dict) or "value" not in raw:
+        raise ValueError(f"{where} must be a table {{ value = ..., unit = \"...\" }}, got {raw!r}")
+    extra = set(raw) - {"value", "unit", "description"}
+    if extra:
+        raise ValueError(f"{where} has unknown field(s) {sorted(extra)}; allowed: value, unit, description")
+    unit = raw.get("unit")
+    if not isinstance(unit, str) or not unit.strip():
+        raise ValueError(f"{where}.unit is missing: every parameter needs a unit"
+                         + (f" (one of {sorted(spec.units)})" if spec.units else ""))
+    if spec.units is not None and unit not in spec.units:
+        raise ValueError(f"{where}.unit must be one of {sorted(spec.units)}, got {unit!r}")
+    factor = spec.units[unit] if spec.units is not None else 1.0
+    value = raw["value"]
+    if spec.array:
+        if not isinstance(value, list) or not value:
+            raise ValueError(f"{where}.value must be a non-empty list of numbers, got {value!r}")
+        written = tuple(_finite(v, f"{where}.value[{i}]") for i, v in enumerate(value))
+        return tuple(factor * v for v in written), Parameter(written, unit)
+    written = _finite(value, f"{where}.value")
+    return factor * written, Parameter(written, unit)
+
+
+def _signals(data, key, count, source):
+    table = data.get(key)
+    if not isinstance(table, dict) or not table:
+        raise ValueError(f"{source}: [{key}] must be a table naming the {key} with their units")
+    for signal, fields in table.items():
+        if not isinstance(fields, dict) or not isinstance(fields.get("unit"), str) or not fields["unit"].strip():
+            raise ValueError(f"{source}: {key}.{signal}.unit is missing: every signal needs a unit")
+        extra = set(fields) - {"unit", "max", "description"}
+        if extra or (key == "outputs" and "max" in fields):
+            allowed = "unit, max, description" if key == "inputs" else "unit, description"
+            raise ValueError(f"{source}: {key}.{signal} has unknown field(s) {sorted(extra | ({'max'} & set(fields)))}; "
+                             f"allowed: {allowed}")
+    if count is not None and len(table) != count:
+        raise ValueError(f"{source}: [{key}] lists {len(table)} signal(s) {list(table)}, the kind defines {count}")
+    return table
+
+
+def loads(text: str, source: str = "<string>") -> Plant:
+    """Parse a plant model from TOML text; ``source`` names the file in error messages."""
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as error:
+        raise ValueError(f"{source}: not valid TOML: {error}") from None
+    allowed = {"name", "kind", "description", "source", "parameters", "inputs", "outputs"}
+    extra = set(data) - allowed
+    if extra:
+        raise ValueError(f"{source}: unknown top-level field(s) {sorted(extra)}; allowed: {sorted(allowed)}")
+    kind = data.get("kind")
+    if kind not in _KINDS:
+        raise ValueError(f"{source}: kind must be one of {list(_KINDS)}, got {kind!r}")
+    name = data.get("name", os.path.splitext(os.path.basename(source))[0])
+    specs = _KINDS[kind]
+    raw_parameters = data.get("parameters")
+    if not isinstance(raw_parameters, dict):
+        raise ValueError(f"{source}: [parameters] table is missing")
+    unknown = set(raw_parameters) - set(specs)
+    if unknown:
+        raise ValueError(f"{source}: unknown parameter(s) {sorted(unknown)} for kind {kind!r}; "
+                         f"allowed: {sorted(specs)}")
+    missing = [key for key, spec in specs.items() if spec.required and key not in raw_parameters]
+    if missing:
+        raise ValueError(f"{source}: missing parameter(s) {missing} for kind {kind!r}")
+    values, written = {}, {}
+    for key, raw in raw_parameters.items():
+        values[key], written[key] = _parameter(raw, specs[key], f"{source}: parameters.{key}")
+
+    inputs = _signals(data, "inputs", 1, source)
+    input_name = next(iter(inputs))
+    u_max = inputs[input_name].get("max")
+    if u_max is not None:
+        u_max = _finite(u_max, f"{source}: inputs.{input_name}.max")
+        if u_max <= 0:
+            raise ValueError(f"{source}: inputs.{input_name}.max must be > 0, got {u_max!r}")
+    try:
+        plant = _build(kind, values, name, input_name, u_max)
+    except ValueError as error:
+        raise ValueError(f"{source}: parameters: {error}") from None
+    outputs = _signals(data, "outputs", len(plant.outputs), source)
+    return Plant(plant.A, plant.B, plant.C, plant.D, inputs=(input_name,), outputs=tuple(outputs),
+                 states=plant.states, parameters=written,
+                 limits={input_name: u_max} if u_max is not None else {}, name=name, kind=kind)
+
+
+def load(path) -> Plant:
+    """Read a plant model file (``models/*.toml``)."""
+    path = os.fspath(path)
+    try:
+        with open(path, encoding="utf-8") as handle:
+            text = handle.read()
+    except OSError as error:
+        raise ValueError(f"{path}: cannot read plant model: {error.strerror}") from None
+    return loads(text, source=path)
+
+
+def describe(path_or_plant) -> str:
+    """The text of ``shapefmu plant show FILE``: the plant's signals, parameters and modes."""
+    from shapefmu.plants.model import as_plant
+
+    plant = as_plant(path_or_plant)
+    lines = [f"plant {plant.name} (kind {plant.kind}), {plant.n_states} states"]
+    for signal in plant.inputs:
+        limit = plant.limits.get(signal)
+        lines.append(f"  input  {signal}" + (f"  |u| <= {limit:g}" if limit is not None else ""))
+    lines.append("  outputs " + ", ".join(plant.outputs))
+    for key, parameter in plant.parameters.items():
+        value = parameter.value
+        text = ", ".join(f"{v:g}" for v in value) if isinstance(value, tuple) else f"{value:g}"
+        lines.append(f"  {key} = {text} [{parameter.unit}]")
+    lines.append(f"  {'f [Hz]':>12} {'omega [rad/s]':>14} {'zeta':>8} {'participation':>14}  pole")
+    for mode in plant.modes():
+        zeta = "-" if math.isnan(mode.zeta) else f"{mode.zeta:.4g}"
+        lines.append(f"  {mode.hz:12.6g} {mode.omega:14.6g} {zeta:>8} {mode.participation:14.4g}  "
+                     f"{mode.pole.real:.6g}{mode.pole.imag:+.6g}j")
+    return "\n".join(lines)
