@@ -581,7 +581,7 @@ class MoveComparison:
         return "\n".join(lines)
 
 
-def residual_vibration(plant, command: Command, distance: float, output=0) -> float:
+def residual_after_move(plant, command: Command, distance: float, output=0) -> float:
     """Vibration left after a move, relative to the distance.
 
     The largest |y_j(t) - y_j,f| over every output j and t from the end of the command through one
@@ -631,7 +631,7 @@ def compare_moves(plant, distance: float, u_max: float | None = None, shapers=No
     candidates += [(f"bang-bang * {name}", rigid.shaped(shaper)) for name, shaper in shapers.items()]
     candidates.append(("time-optimal", optimal.command))
     moves = tuple(
-        Move(name, command, command.duration, residual_vibration(plant, command, distance, output), command.peak)
+        Move(name, command, command.duration, residual_after_move(plant, command, distance, output), command.peak)
         for name, command in candidates
     )
     return MoveComparison(plant.name, distance, u_max, moves, optimal)
