@@ -4,6 +4,7 @@ import csv
 import io
 import json
 import math
+import warnings
 from pathlib import Path
 
 import control
@@ -11,8 +12,9 @@ import numpy as np
 import pytest
 from scipy.linalg import expm
 
-from shapefmu.optimal import Command, compare_moves, optimal_report, time_optimal
-from shapefmu.plants import Plant, disk_drive, load, rigid_flexible
+from shapefmu.optimal import (Command, check_optimality, compare_moves, optimal_report, refine_transcription,
+                              time_optimal, transcribe)
+from shapefmu.plants import Plant, disk_drive, load, pendula, rigid_flexible, ten_pendula
 from shapefmu.shapers import convolve_modes, simultaneous
 
 MODELS = Path(__file__).resolve().parent.parent / "models"
@@ -255,3 +257,80 @@ def test_optimal_report_prints_table_and_switches(tmp_path):
     text = optimal_report(MODELS / "disk_drive.toml", LONG, plot=tmp_path / "moves.png")
     assert "time-optimal" in text and "5 switches" in text
     assert (tmp_path / "moves.png").stat().st_size > 0
+
+
+@pytest.mark.parametrize("distance", [LONG, SHORT])
+def test_disk_drive_move_passes_pontryagin_and_no_shorter_move_exists(distance):
+    solution = time_optimal(disk_drive(), distance, U)
+    check = check_optimality(disk_drive(), solution, shorter=1e-4)
+    assert check.sigma_at_switches < 1e-9  # sigma vanishes at every switch ...
+    assert check.sign_margin > 1e-6  # ... and has the sign of u on every arc
+    assert check.dual_peak_at_shorter > U  # weak duality: T (1 - 1e-4) needs more than U
+    assert check.lp_peak_at_shorter > U  # and a fine grid LP finds no such move either
+
+
+def test_casadi_transcription_refines_to_the_same_move():
+    # Second method for the structure: free-final-time CasADi transcription, refined the same way.
+    casadi = refine_transcription(disk_drive(), transcribe(disk_drive(), LONG, U, 100), n_samples=2)
+    lp = time_optimal(disk_drive(), LONG, U, n_samples=2)
+    assert casadi.T == pytest.approx(lp.T, rel=1e-12)
+    assert casadi.switch_times == pytest.approx(lp.switch_times, rel=1e-10)
+
+
+# Ten-pendula comb (paper 003): 1.7 m at the peak acceleration of its M-BC:TZ:TP profile.
+PENDULA_U = 0.26
+
+
+def pendula_matrices():
+    """A, B of the comb written out from L theta'' + g theta = -a, x'' = a."""
+    from shapefmu.plants.library import TEN_PENDULA_LENGTHS
+
+    n = 2 + 2 * len(TEN_PENDULA_LENGTHS)
+    A, B = np.zeros((n, n)), np.zeros(n)
+    A[0, 1], B[1] = 1.0, 1.0
+    for i, length in enumerate(TEN_PENDULA_LENGTHS):
+        k = 2 + 2 * i
+        A[k, k + 1], A[k + 1, k], B[k + 1] = 1.0, -9.80665 / length, -1.0 / length
+    return A, B
+
+
+@pytest.fixture(scope="module", params=[1.7, 3.0], ids=["1.7m-21-switches", "3.0m-23-switches"])
+def ten_pendula_move(request):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)  # neither off rest nor longer than the grid's move
+        return request.param, time_optimal(ten_pendula(), request.param, PENDULA_U)
+
+
+def test_ten_pendula_move_ends_at_rest_by_expm(ten_pendula_move):
+    distance, solution = ten_pendula_move
+    assert_at_rest(expm_final_state(*pendula_matrices(), solution), distance, solution.T)
+    # 22 states: 21 switches; the longer move adds a short pulse pair (sigma vanishes at 23 points).
+    assert len(solution.switch_times) == {1.7: 21, 3.0: 23}[distance]
+
+
+def test_ten_pendula_move_is_antisymmetric_about_half_time(ten_pendula_move):
+    # Undamped plant, rest to rest: -u(T - t) is also optimal (time reversal), and the optimum is
+    # unique, so u(T - t) = -u(t): switches mirror about T / 2 and the levels alternate in sign.
+    _, solution = ten_pendula_move
+    switches = np.array(solution.switch_times)
+    assert switches + switches[::-1] == pytest.approx(np.full(switches.size, solution.T), abs=1e-9 * solution.T)
+    assert solution.levels == tuple(PENDULA_U * (-1) ** k for k in range(switches.size + 1))
+
+
+def test_ten_pendula_move_passes_pontryagin_and_no_shorter_move_exists(ten_pendula_move):
+    distance, solution = ten_pendula_move
+    check = check_optimality(ten_pendula(), solution, shorter=1e-4)
+    assert check.sigma_at_switches < 1e-9
+    assert check.sign_margin > 1e-6
+    assert check.dual_peak_at_shorter > PENDULA_U  # weak duality: T (1 - 1e-4) needs more than U
+    assert check.lp_peak_at_shorter > PENDULA_U
+    # The grid's move is feasible, so the optimum is no longer than it.
+    assert solution.T <= solution.transcription_T
+
+
+def test_three_pendula_move_passes_pontryagin_and_no_shorter_move_exists():
+    plant = pendula([0.7, 0.8, 0.9])
+    solution = time_optimal(plant, 1.0, 0.5)
+    check = check_optimality(plant, solution)
+    assert solution.residual < 1e-9
+    assert check.sign_margin > 0 and check.dual_peak_at_shorter > 0.5 and check.lp_peak_at_shorter > 0.5

@@ -4,13 +4,20 @@
 
 1. a feasible start: the shortest time, to a factor of 2, at which a linear program on a coarse
    grid of piecewise-constant inputs reaches the target (exact discretisation, scipy's HiGHS);
-2. the structure: a direct transcription with free final time (CasADi + IPOPT), in dimensionless
-   time, input and states, whose grid input shows the sequence of bang levels and roughly where
-   they switch;
+2. the structure: the shortest T on a fine uniform grid (``lp_transcription``: bisection on T of
+   the least-peak LP, with the equality rows orthonormalised so that the ten pendula's nearly
+   dependent modes are met too), whose grid input shows the sequence of bang levels and roughly
+   where they switch. ``transcribe`` is the free-final-time alternative (CasADi + IPOPT), slower
+   and, for the ten pendula, not converging; ``refine_transcription`` accepts either;
 3. exact switch times: Newton / Levenberg-Marquardt on the switch instants and T, with the final
    state computed exactly for piecewise-constant input from matrix exponentials of the augmented
-   matrix [[A, B], [0, 0]], expm of which holds e^{A t} and its integral times B.
+   matrix [[A, B], [0, 0]], expm of which holds e^{A t} and its integral times B. Where that
+   Jacobian is nearly singular (closely spaced modes: the ten pendula, relative singular value
+   ~1e-14) double precision fixes the switch times only to ~1e-4 and the fit slides to a longer
+   move; ``refine_exact`` then solves the extremal's equations (rest at T, Pontryagin's switching
+   function zero at every switch) for the switch times, T and the costate in 40-digit arithmetic.
 
+``check_optimality`` tests the result against Pontryagin's switching function and a shorter T.
 ``compare_moves`` then sets the true optimum beside the rigid-body bang-bang of paper 002, eq. (2),
 and the bang-bang convolved with impulse shapers (paper 002, eqs. 4 and 21), all simulated exactly.
 """
@@ -24,9 +31,11 @@ import warnings
 from dataclasses import dataclass
 
 import casadi as ca
+import mpmath
 import numpy as np
 from scipy.linalg import expm, matrix_balance
 from scipy.optimize import least_squares, linprog
+from scipy.sparse.csgraph import connected_components
 
 from shapefmu.plants.model import Plant, as_plant, rigid_part
 from shapefmu.runtime.checks import check_finite, check_positive
@@ -225,14 +234,33 @@ def _grid_states(A, B, T, u):
     return np.array(x)
 
 
+def _min_norm_grid_input(A, B, x_f, T, N):
+    """The grid input of least peak |u| that reaches x_f at T from rest: (peak, u), by LP (HiGHS).
+
+    The rows of x_N = Gamma u are replaced by the equivalent orthonormal rows V^T u = S^-1 U^T x_f
+    (Gamma = U S V^T): closely spaced modes (the ten pendula) make Gamma's singular values span
+    15 decades, and a tolerance on the raw rows would let the LP miss the weak directions by far
+    more than the rest state allows.
+    """
+    _, _, Gamma = _grid_maps(A, B, T, N)
+    U, S, Vt = np.linalg.svd(Gamma, full_matrices=False)
+    n = S.size
+    # Variables (u_1..u_N, s): minimise s with -s <= u_k <= s.
+    cost = np.zeros(N + 1)
+    cost[-1] = 1.0
+    eye = np.eye(N)
+    A_ub = np.block([[eye, -np.ones((N, 1))], [-eye, -np.ones((N, 1))]])
+    result = linprog(cost, A_ub=A_ub, b_ub=np.zeros(2 * N), A_eq=np.hstack([Vt, np.zeros((n, 1))]),
+                     b_eq=(U.T @ x_f) / S, bounds=[(None, None)] * N + [(0.0, None)], method="highs")
+    if result.status != 0:
+        return math.inf, None
+    return float(result.x[-1]), result.x[:N]
+
+
 def _feasible_grid_input(A, B, x_f, u_max, T, N):
     """A grid input with |u| <= u_max reaching x_f at T from rest (None if the LP is infeasible)."""
-    _, _, Gamma = _grid_maps(A, B, T, N)
-    # Rows scaled to unit size: the rigid-body and modal rows differ by orders of magnitude.
-    row = np.maximum(np.abs(Gamma).max(axis=1), 1e-300)
-    result = linprog(np.zeros(N), A_eq=Gamma / row[:, None], b_eq=x_f / row, bounds=[(-u_max, u_max)] * N,
-                     method="highs")
-    return result.x if result.status == 0 else None
+    peak, u = _min_norm_grid_input(A, B, x_f, T, N)
+    return u if peak <= u_max else None
 
 
 def _bracket(A, B, x_f, u_max, N):
@@ -250,6 +278,49 @@ def _bracket(A, B, x_f, u_max, N):
         if step == 2.0 and u is not None:
             return T, u
     raise ValueError("unreachable target: no move time between 2^-200 and 2^200 s was found feasible")
+
+
+def lp_transcription(plant, distance: float, u_max: float | None = None, n_intervals: int = 100, output=0,
+                     rel_tol: float = 1e-6):
+    """The shortest move time on a uniform grid of piecewise-constant inputs, by bisection on T of
+    the least-peak LP (``_min_norm_grid_input``), and that grid input: a ``Transcription``.
+
+    The grid has max(``n_intervals``, 50 per state) steps, enough for the ten-pendula comb's 21
+    switches to fall in separate steps. The grid restricts the input, so its T bounds the true
+    minimum from above; its partial steps mark the switches that ``refine`` makes exact.
+    """
+    plant = as_plant(plant)
+    u_max = _u_max(plant, u_max)
+    distance = check_finite(distance, "distance")
+    if distance == 0.0:
+        raise ValueError("distance must be non-zero: a move of 0 takes no time")
+    if int(n_intervals) < 2:
+        raise ValueError(f"n_intervals must be >= 2, got {n_intervals!r}")
+    plant, x_f, _ = _checked_problem(plant, distance, u_max, output)
+    A, B = plant.A, plant.B[:, :1]
+    N = max(int(n_intervals), 50 * plant.n_states)
+    hi, _ = _bracket(A, B, x_f, u_max, min(N, 60))
+    peak, u = _min_norm_grid_input(A, B, x_f, hi, N)
+    solves = 1
+    while peak > u_max:  # the coarse bracket's grid is not this one
+        hi *= 2.0
+        peak, u = _min_norm_grid_input(A, B, x_f, hi, N)
+        solves += 1
+    lo = hi / 2.0
+    while _min_norm_grid_input(A, B, x_f, lo, N)[0] <= u_max:
+        hi, lo = lo, lo / 2.0
+        solves += 1
+    while hi - lo > rel_tol * hi:
+        mid = 0.5 * (lo + hi)
+        peak_mid, u_mid = _min_norm_grid_input(A, B, x_f, mid, N)
+        solves += 1
+        if peak_mid <= u_max:
+            hi, u = mid, u_mid
+        else:
+            lo = mid
+    _, u = _min_norm_grid_input(A, B, x_f, hi, N)
+    return Transcription(float(hi), np.clip(u, -u_max, u_max), N, solves, distance, u_max,
+                         _output_index(plant, output))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -424,9 +495,219 @@ def refine(plant, x_f, levels, switches, T, scale):
         return _final_state(A, B, p[:-1] * t0, p[-1] * t0, levels)[1] * t0 / scale[:, None]
 
     p0 = np.append(np.asarray(switches, dtype=float), T) / t0
-    fit = least_squares(residual, p0, jac=jacobian, method="lm", xtol=1e-15, ftol=1e-15, gtol=1e-15)
+    # Levenberg-Marquardt needs at least as many residuals as unknowns; more switches than states
+    # (fast oscillatory modes over a long move) leave a family of solutions: trust region then.
+    method = "lm" if p0.size <= x_f.size else "trf"
+    fit = least_squares(residual, p0, jac=jacobian, method=method, xtol=1e-15, ftol=1e-15, gtol=1e-15,
+                        max_nfev=100 * p0.size)
     p = fit.x * t0
     return list(p[:-1]), float(p[-1])
+
+
+# ---------------------------------------------------------------------------------------------
+# Exact (extended-precision) propagation, for plants whose modes are closely spaced
+
+
+_EXACT_DIGITS = 40
+
+
+def _divided_difference(f, df, l1, l2):
+    """f[l1, l2] = (f(l1) - f(l2)) / (l1 - l2), f'(l1) when l1 == l2 (Newton form of a 2x2 f(M))."""
+    if l1 == l2:
+        return df(l1)
+    with mpmath.workdps(2 * mpmath.mp.dps):  # the difference of nearly equal values loses digits
+        return (f(l1) - f(l2)) / (l1 - l2)
+
+
+class _ExactPlant:
+    """e^{A tau} B and Phi(tau) = int_0^tau e^{A s} ds B to ``_EXACT_DIGITS`` digits (mpmath).
+
+    Closely spaced modes (the ten pendula) make the final state's dependence on the switch times
+    nearly singular (relative singular values ~1e-14): double precision then fixes the switch
+    times only to ~1e-4 and lets an iteration slide along the weak directions. In 40 digits those
+    directions are resolved to ~1e-26. A is split into the blocks that no entry couples (a modal or
+    physical-coordinate model is block diagonal), and each block of size <= 2 is evaluated in
+    closed form, f(M) = f(l1) I + f[l1, l2] (M - l1 I) (Newton's form of Sylvester's formula) with
+    f(l) = e^{l tau} and f(l) = (e^{l tau} - 1) / l; larger blocks use mpmath's expm of the
+    augmented matrix [[A, B], [0, 0]].
+    """
+
+    def __init__(self, A, B):
+        n = A.shape[0]
+        _, labels = connected_components(np.abs(A) + np.abs(A.T) > 0, directed=False)
+        self.n = n
+        self.blocks = []
+        for label in np.unique(labels):
+            index = np.flatnonzero(labels == label)
+            M = mpmath.matrix(A[np.ix_(index, index)].tolist())
+            b = mpmath.matrix(B[index, 0].tolist())
+            if index.size == 1:
+                eigenvalues = (M[0, 0], M[0, 0])
+            elif index.size == 2:
+                half = (M[0, 0] + M[1, 1]) / 2
+                root = mpmath.sqrt(mpmath.mpc(half**2 - (M[0, 0] * M[1, 1] - M[0, 1] * M[1, 0])))
+                eigenvalues = (half + root, half - root)
+            else:
+                eigenvalues = None
+            self.blocks.append((index, M, b, eigenvalues))
+        self.A = mpmath.matrix(A.tolist())
+        self.B = mpmath.matrix(B[:, 0].tolist())
+
+    def _block(self, M, b, eigenvalues, f, df):
+        l1, l2 = eigenvalues
+        if M.rows == 1:
+            return mpmath.matrix([mpmath.re(f(l1)) * b[0]])
+        c0, c1 = f(l1), _divided_difference(f, df, l1, l2)
+        Mb = M * b
+        return mpmath.matrix([mpmath.re(c0 * b[i] + c1 * (Mb[i] - l1 * b[i])) for i in range(M.rows)])
+
+    def propagate(self, tau):
+        """(e^{A tau} B, Phi(tau)) as mpmath vectors."""
+        tau = mpmath.mpf(tau)
+        E, P = mpmath.matrix(self.n, 1), mpmath.matrix(self.n, 1)
+        for index, M, b, eigenvalues in self.blocks:
+            if eigenvalues is None:
+                k = M.rows
+                aug = mpmath.zeros(k + 1, k + 1)
+                for i in range(k):
+                    aug[i, k] = b[i] * tau
+                    for j in range(k):
+                        aug[i, j] = M[i, j] * tau
+                Z = mpmath.expm(aug)
+                e_block = mpmath.matrix([sum(Z[i, j] * b[j] for j in range(k)) for i in range(k)])
+                p_block = mpmath.matrix([Z[i, k] for i in range(k)])
+            else:
+                exp = lambda l: mpmath.exp(l * tau)
+                dexp = lambda l: tau * mpmath.exp(l * tau)
+                phi = lambda l: mpmath.expm1(l * tau) / l if l != 0 else tau
+                dphi = lambda l: (l * tau * mpmath.exp(l * tau) - mpmath.expm1(l * tau)) / l**2 if l != 0 else tau**2 / 2
+                e_block = self._block(M, b, eigenvalues, exp, dexp)
+                p_block = self._block(M, b, eigenvalues, phi, dphi)
+            for i, row in enumerate(index):
+                E[int(row)], P[int(row)] = e_block[i], p_block[i]
+        return E, P
+
+    def switching_function(self, eta):
+        """sigma(tau) = eta^T e^{A tau} B as a function of the time to go tau, in closed form per block:
+        eta_b^T f(M) b = f(l1) eta_b^T b + f[l1, l2] eta_b^T (M - l1 I) b with f(l) = e^{l tau}."""
+        terms = []
+        for index, M, b, eigenvalues in self.blocks:
+            e = [eta[int(i)] for i in index]
+            if eigenvalues is None:
+                terms.append((None, M, b, e))
+            else:
+                Mb = M * b
+                along_b = sum(e[i] * b[i] for i in range(M.rows))
+                along_m = sum(e[i] * (Mb[i] - eigenvalues[0] * b[i]) for i in range(M.rows)) if M.rows == 2 else 0
+                terms.append((eigenvalues, along_b, along_m, None))
+
+        def sigma(tau):
+            tau = mpmath.mpf(tau)
+            exp = lambda l: mpmath.exp(l * tau)
+            dexp = lambda l: tau * mpmath.exp(l * tau)
+            total = mpmath.mpf(0)
+            for eigenvalues, first, second, e in terms:
+                if eigenvalues is None:  # first, second = M, b of a block larger than 2
+                    total += sum(ei * value for ei, value in zip(e, mpmath.expm(first * tau) * second))
+                else:
+                    l1, l2 = eigenvalues
+                    total += mpmath.re(first * exp(l1) + second * _divided_difference(exp, dexp, l1, l2))
+            return total
+
+        return sigma
+
+    def final_state(self, switches, T, levels):
+        """x(T) from rest, its Jacobian in (switches..., T) as in ``_final_state``, and the columns
+        e^{A (T - s)} B at s = 0, the switches and T, exactly."""
+        edges = [mpmath.mpf(0), *switches, T]
+        phis, columns = [], []
+        for edge in edges:
+            E, P = self.propagate(T - edge)
+            phis.append(P)
+            columns.append(E)
+        x = mpmath.matrix(self.n, 1)
+        for k, level in enumerate(levels):
+            x += level * (phis[k] - phis[k + 1])
+        J = mpmath.matrix(self.n, len(switches) + 1)
+        for k in range(1, len(levels)):
+            for i in range(self.n):
+                J[i, k - 1] = (levels[k - 1] - levels[k]) * columns[k][i]
+        rate = self.A * x + self.B * levels[-1]
+        for i in range(self.n):
+            J[i, len(switches)] = rate[i]
+        return x, J, columns
+
+
+def _rest_state_exact(plant: Plant, distance: float, output: int):
+    """``rest_state`` in extended precision (a double solve leaves ~1e-17 in the modal targets,
+    which the weak directions would amplify)."""
+    j = output
+    M = np.block([[plant.A, plant.B[:, :1]], [plant.C[j : j + 1], plant.D[j : j + 1, :1]]])
+    rhs = mpmath.matrix(M.shape[0], 1)
+    rhs[M.shape[0] - 1] = mpmath.mpf(distance)
+    return mpmath.lu_solve(mpmath.matrix(M.tolist()), rhs)[: plant.n_states, 0]
+
+
+def refine_exact(plant, distance: float, output: int, levels, switches, T, max_iterations: int = 40):
+    """Switch times, T and the costate eta of a bang-bang extremal, by Newton's method in
+    ``_EXACT_DIGITS`` digits: x(T) = x_f, sigma(s_k) = eta^T e^{A (T - s_k)} B = 0 at every switch
+    and eta^T x_f = 1 (n + m + 1 equations in the m switches, T and the n costate components).
+
+    With the costate among the unknowns the system is square for any number of switches m (the
+    ten pendula's longer moves need n + 1). Returns (switches, T) rounded to double, or None if
+    Newton does not converge, reorders the switches or meets a singular Jacobian.
+    """
+    plant = as_plant(plant)
+    n, m = plant.n_states, len(switches)
+    with mpmath.workdps(_EXACT_DIGITS):
+        exact = _ExactPlant(plant.A, plant.B[:, :1])
+        x_f = _rest_state_exact(plant, distance, output)
+        levels = [mpmath.mpf(level) for level in levels]
+        # Initial costate: the direction nearest to orthogonal to e^{A (T - s_k)} B at every switch.
+        rows = mpmath.zeros(m + 1, n)
+        for k, s in enumerate(switches):
+            column = exact.propagate(mpmath.mpf(T) - s)[0]
+            for i in range(n):
+                rows[k, i] = column[i]
+        eta = mpmath.svd_r(rows, full_matrices=True)[2][n - 1, :].T
+        along = sum(eta[i] * x_f[i] for i in range(n))
+        if along == 0:
+            return None
+        p = mpmath.matrix([*map(mpmath.mpf, switches), mpmath.mpf(T), *(eta / along)])
+        for _ in range(max_iterations):
+            s, t_end, eta = list(p[:m]), p[m], p[m + 1 :]
+            x, J_x, columns = exact.final_state(s, t_end, levels)
+            F = mpmath.zeros(n + m + 1, 1)
+            J = mpmath.zeros(n + m + 1, n + m + 1)
+            for i in range(n):
+                F[i] = x[i] - x_f[i]
+                for j in range(m + 1):
+                    J[i, j] = J_x[i, j]
+            for k in range(m):
+                column = columns[k + 1]
+                rate = exact.A * column
+                F[n + k] = sum(eta[i] * column[i] for i in range(n))
+                slope = sum(eta[i] * rate[i] for i in range(n))
+                J[n + k, k], J[n + k, m] = -slope, slope
+                for i in range(n):
+                    J[n + k, m + 1 + i] = column[i]
+            F[n + m] = sum(eta[i] * x_f[i] for i in range(n)) - 1
+            for i in range(n):
+                J[n + m, m + 1 + i] = x_f[i]
+            try:
+                step = mpmath.lu_solve(J, -F)
+            except ZeroDivisionError:
+                return None
+            p += step
+            edges = [0.0, *(float(v) for v in p[: m + 1])]
+            if any(b <= a for a, b in zip(edges[:-1], edges[1:])):
+                return None
+            if mpmath.norm(step[: m + 1]) <= mpmath.mpf(10) ** (16 - _EXACT_DIGITS) * p[m]:
+                x = exact.final_state(list(p[:m]), p[m], levels)[0]
+                if mpmath.norm(x - x_f) > mpmath.mpf(10) ** (20 - _EXACT_DIGITS) * mpmath.norm(x_f):
+                    return None
+                return [float(v) for v in p[:m]], float(p[m])
+        return None
 
 
 # ---------------------------------------------------------------------------------------------
@@ -503,21 +784,33 @@ def time_optimal(plant, distance: float, u_max: float | None = None, output=0, n
 
     ``plant`` is a ``Plant``, a python-control LTI or a model file with one input; ``u_max``
     defaults to the plant's declared input limit. Every mode ends at rest: x(T) = x_f with
-    (x_f, u_f) the rest state of ``rest_state``. The transcription (``transcribe``, ``n_intervals``
-    steps) finds the bang-bang structure; ``refine`` makes the switch times exact.
+    (x_f, u_f) the rest state of ``rest_state``. The grid transcription (``lp_transcription``, at
+    least ``n_intervals`` steps) finds the bang-bang structure; ``refine`` makes the switch times
+    exact; ``check_optimality`` verifies the result.
 
     Raises ValueError for u_max <= 0, a plant that is not controllable from its input, or a
     target that has no rest state within the limit. Warns (RuntimeWarning) if the refined move
-    misses the rest state by more than ``tolerance`` (relative to each state's peak).
+    misses the rest state by more than ``tolerance`` (relative to each state's peak), or is longer
+    than the grid's move (then it rests but is not the optimum: the structure was wrong).
     """
     plant = as_plant(plant)
-    grid = transcribe(plant, distance, u_max, n_intervals, output)
+    grid = lp_transcription(plant, distance, u_max, n_intervals, output)
     return refine_transcription(plant, grid, n_samples, tolerance)
+
+
+def _ill_conditioned(plant, levels, switches, T, scale, threshold: float = 1e-8) -> bool:
+    """True if the final state's Jacobian in (switches, T), dimensionless, has a singular value
+    below ``threshold`` of its largest: double precision then leaves the switch times uncertain
+    by ~1e-16 / threshold (closely spaced modes)."""
+    J = _final_state(plant.A, plant.B[:, :1], np.asarray(switches, dtype=float), T, levels)[1] * T / scale[:, None]
+    s = np.linalg.svd(J, compute_uv=False)
+    return bool(s[-1] < threshold * s[0])
 
 
 def refine_transcription(plant, grid: Transcription, n_samples: int = 2001,
                          tolerance: float = 1e-9) -> TimeOptimalSolution:
-    """The exact time-optimal move from the bang-bang structure of a transcription (``refine``)."""
+    """The exact time-optimal move from the bang-bang structure of a transcription (``refine``,
+    and ``refine_exact`` where the double-precision fit is ill-conditioned)."""
     plant = as_plant(plant)
     distance, u_max, output = grid.distance, grid.u_max, grid.output
     x_f, u_f = rest_state(plant, distance, output)
@@ -525,7 +818,17 @@ def refine_transcription(plant, grid: Transcription, n_samples: int = 2001,
     command = Command((0.0, *switches, grid.T), tuple(levels), u_f)
     _, states = simulate(plant, command, np.linspace(0.0, grid.T, 201))
     scale = _peak_scale(states, x_f, distance)
+    start = (list(switches), grid.T)
     switches, T = refine(plant, x_f, levels, switches, grid.T, scale)
+    if _ill_conditioned(plant, levels, switches, T, scale):
+        # The double-precision fit has only ~1e-4 of the switch times right; redo it in extended
+        # precision from the transcription's estimate, else from that fit. An extremal that
+        # reaches x_f is the optimum (``check_optimality`` verifies it), so the first one is kept.
+        for guess in (start, (switches, T)):
+            exact = refine_exact(plant, distance, output, levels, *guess)
+            if exact is not None:
+                switches, T = exact
+                break
     edges = np.concatenate([[0.0], switches, [T]])
     if np.any(np.diff(edges) < -1e-12 * T):
         raise ValueError(f"switch-time refinement of the move of {distance:g} on plant {plant.name!r} reordered the "
@@ -535,6 +838,12 @@ def refine_transcription(plant, grid: Transcription, n_samples: int = 2001,
     at_breaks, x = simulate(plant, command, t)
     error = at_breaks[-1] - x_f
     residual = float(np.max(np.abs(error) / _peak_scale(x, x_f, distance)))
+    if T > grid.T * (1.0 + 1e-9):
+        # The grid's move is feasible, so the optimum is no longer than grid.T: the refinement has
+        # slid along a nearly singular direction (closely spaced modes) to a longer extremal.
+        warnings.warn(f"time_optimal: the refined move ({T:.10g} s) is longer than the grid transcription's "
+                      f"({grid.T:.10g} s) on plant {plant.name!r}; it rests but is not time-optimal to "
+                      f"{T / grid.T - 1:.2g}", RuntimeWarning, stacklevel=3)
     if residual > tolerance:
         # Closely spaced modes (the ten pendula) can call for pulses shorter than the grid resolves;
         # the refined move then misses the target by ``residual``, which the solution reports.
@@ -546,6 +855,109 @@ def refine_transcription(plant, grid: Transcription, n_samples: int = 2001,
         x=x, distance=distance, u_max=u_max, u_final=u_f, final_error=tuple(map(float, error)), residual=residual,
         states=plant.states, transcription_T=grid.T,
     )
+
+
+# ---------------------------------------------------------------------------------------------
+# Optimality check (Pontryagin's switching function and a shorter-time test)
+
+
+@dataclass(frozen=True)
+class OptimalityCheck:
+    """Evidence that a bang-bang move is time-optimal, not only feasible.
+
+    Pontryagin: u(t) = u_max sign(sigma(t)) with sigma(t) = eta^T e^{A (T - t)} B, eta the final
+    costate. ``costate`` is eta (unit length, in the plant's states divided by their peaks over the
+    move), the right singular vector of [e^{A (T - t_k)} B]^T over the switches t_k, so that sigma
+    vanishes at every switch; unique when there are >= n - 1 switches. ``sigma_at_switches`` is
+    max |sigma(t_k)| / max |sigma|; ``sign_margin`` the least of level * sigma / max |sigma| over
+    50 interior points of every arc (> 0: sigma changes sign exactly at the switches and nowhere
+    else, so the move maximises eta^T x(T) and its end lies on the boundary of the reachable set).
+    ``dual_peak_at_shorter`` is eta^T x_f / int_0^T' |eta^T e^{A s} B| ds at T' = T (1 - shorter):
+    by weak duality every input that reaches x_f at T' needs a peak at least this, so a value above
+    u_max proves that no move is that much shorter. ``lp_peak_at_shorter`` is the least peak of a
+    grid input (``n_intervals`` steps, LP) reaching x_f at T', above u_max when the grid is infeasible.
+    """
+
+    costate: tuple[float, ...]
+    sigma_at_switches: float
+    sign_margin: float
+    shorter: float
+    dual_peak_at_shorter: float
+    lp_peak_at_shorter: float
+    u_max: float
+    n_intervals: int
+
+    @property
+    def time_optimal(self) -> bool:
+        return (self.sign_margin > 0.0 and self.dual_peak_at_shorter > self.u_max
+                and self.lp_peak_at_shorter > self.u_max)
+
+
+def _planned_rest_state(plant: Plant, solution: TimeOptimalSolution):
+    """The rest state the move was planned for, in extended precision: ``rest_state`` of the first
+    output whose rest state matches x(T) - final_error (the output is not stored)."""
+    x_f = simulate(plant, solution.command)[-1] - np.asarray(solution.final_error)
+    tolerance = 1e-9 * max(float(np.max(np.abs(x_f))), abs(solution.distance))
+    for j in range(len(plant.outputs)):
+        try:
+            candidate, _ = rest_state(plant, solution.distance, j)
+        except ValueError:
+            continue
+        if np.max(np.abs(candidate - x_f)) <= tolerance:
+            return x_f, _rest_state_exact(plant, solution.distance, j)
+    return x_f, mpmath.matrix(x_f.tolist())
+
+
+def check_optimality(plant, solution: TimeOptimalSolution, shorter: float = 1e-4,
+                     n_intervals: int | None = None) -> OptimalityCheck:
+    """Pontryagin's switching function of ``solution`` and the shorter-time tests (``OptimalityCheck``).
+
+    The costate, sigma and the dual bound are computed in ``_EXACT_DIGITS`` digits (``_ExactPlant``):
+    for closely spaced modes the costate's modal components are ~1e12 times its rigid-body ones and
+    cancel in sigma, which double precision would leave with no correct digit.
+    ``n_intervals`` defaults to 100 per state for the grid LP at T (1 - ``shorter``).
+    """
+    plant = as_plant(plant)
+    shorter = check_positive(shorter, "shorter")
+    if shorter >= 1.0:
+        raise ValueError(f"shorter must be in (0, 1), got {shorter!r}")
+    T = solution.T
+    switches = np.asarray(solution.switch_times, dtype=float)
+    levels = np.sign(solution.levels)
+    edges = np.concatenate([[0.0], switches, [T]])
+    T_short = T * (1.0 - shorter)
+    with mpmath.workdps(_EXACT_DIGITS):
+        x_f, x_f_exact = _planned_rest_state(plant, solution)
+        # Peak-scaled states: the modal rows would otherwise dominate the singular vectors.
+        scale = _peak_scale(solution.x, x_f, solution.distance)
+        exact = _ExactPlant(plant.A, plant.B[:, :1])
+        n = plant.n_states
+        rows = mpmath.zeros(len(switches) + 1, n)
+        for k, t in enumerate(switches):
+            column = exact.propagate(T - t)[0]
+            for i in range(n):
+                rows[k, i] = column[i] / scale[i]
+        eta = mpmath.svd_r(rows, full_matrices=True)[2][n - 1, :]
+        # sigma in the peak-scaled states is (eta / scale)^T e^{A (T - t)} B.
+        eta_physical = [eta[i] / scale[i] for i in range(n)]
+        sigma_of_time_to_go = exact.switching_function(eta_physical)
+        fractions = (np.arange(50) + 0.5) / 50
+        samples = [(level, a + fractions * (c - a)) for level, a, c in zip(levels, edges, edges[1:]) if level != 0]
+        sigma = [(level, np.array([float(sigma_of_time_to_go(T - ti)) for ti in t])) for level, t in samples]
+        peak = max(float(np.max(np.abs(values))) for _, values in sigma)
+        sign = 1.0 if sigma[0][0] * sigma[0][1][0] >= 0 else -1.0  # free sign: u = +u_max where sigma > 0
+        margin = min(float(np.min(level * sign * values)) for level, values in sigma) / peak
+        at_switches = max((abs(float(sigma_of_time_to_go(T - t))) for t in switches), default=0.0) / peak
+        # int_0^T' |sigma| over time-to-go s = T - t: sigma's roots are the switches' s_k = T - t_k.
+        cuts = np.concatenate([[0.0], np.sort(T - switches), [T]])
+        cuts = np.append(cuts[cuts < T_short], T_short)
+        Phi = [exact.propagate(c)[1] for c in cuts]
+        integral = sum(abs(sum(eta_physical[i] * (p1[i] - p0[i]) for i in range(n))) for p0, p1 in zip(Phi, Phi[1:]))
+        dual_peak = float(abs(sum(eta_physical[i] * x_f_exact[i] for i in range(n))) / integral)
+        costate = tuple(float(sign * value) for value in eta)
+    N = 100 * plant.n_states if n_intervals is None else int(n_intervals)
+    lp_peak, _ = _min_norm_grid_input(plant.A, plant.B[:, :1], x_f, T_short, N)
+    return OptimalityCheck(costate, at_switches, margin, shorter, dual_peak, lp_peak, solution.u_max, N)
 
 
 # ---------------------------------------------------------------------------------------------
