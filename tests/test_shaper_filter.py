@@ -34,6 +34,18 @@ def test_streaming_fir_taps_equal_offline_convolution():
     )
 
 
+@pytest.mark.parametrize("kept", [lambda k: k % 4 != 0, lambda k: k % 40 == 0], ids=["dense-with-zeros", "sparse"])
+def test_taps_with_zeros_and_a_rest_value_equal_offline_convolution(kept):
+    # Zeros inside the span and before the first non-zero tap: the filter sums the span in one go
+    # where the non-zero taps fill it (3 of 4) and loops over them where they are scattered.
+    rng = np.random.default_rng(5)
+    taps = np.array([rng.normal() if k >= 7 and kept(k) else 0.0 for k in range(300)])
+    u0, u = 1.5, rng.normal(size=2000)
+    history = np.concatenate([np.full(taps.size, u0), u])
+    offline = np.convolve(history, taps)[taps.size : taps.size + u.size]
+    np.testing.assert_allclose(_stream(StreamingShaper.from_taps(list(taps), u0), u), offline, rtol=0, atol=1e-12)
+
+
 def test_streaming_filter_started_at_rest_on_a_held_value_stays_there():
     shaper = zvd(10.0, 0.1)
     filt = StreamingShaper.from_impulses(shaper.times, shaper.amplitudes, 1e-3, u0=2.5)

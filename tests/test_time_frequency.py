@@ -44,6 +44,16 @@ def test_leakage_equals_quadrature_of_the_dtft():
     assert energy_leakage(n, OMEGA_0, TS, MOVE) == pytest.approx(1.0 - low / total, rel=1e-6)
 
 
+def test_tiny_leakage_of_a_long_move_equals_quadrature_of_the_out_of_band_energy():
+    # At 5 ms and its optimal n, 1 - J is ~2e-10: adaptive quadrature of |G|^2 over [omega_0, pi]
+    # (the numerator of eq. 19) keeps its digits, which one minus the in-band share would not.
+    move, n = 5e-3, 10.9278
+    g = sampled_phi(n, TS, move)
+    w0 = OMEGA_0 * TS
+    outside = quad(lambda w: abs(dtft(g, w)[0]) ** 2, w0, math.pi, epsabs=0, epsrel=1e-11, limit=500)[0]
+    assert energy_leakage(n, OMEGA_0, TS, move) == pytest.approx(outside / (math.pi * np.sum(g * g)), rel=1e-9)
+
+
 def test_eq17_odd_m_magnitude_matches_dtft():
     n, m = 11.4, 125  # move 2.5 ms at 20 us: M odd
     g = sampled_phi(n, TS, m * TS)

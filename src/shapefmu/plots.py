@@ -28,7 +28,7 @@ def plot_sensitivity(curves: Sequence[tuple[str, SensitivityCurve]], path, vtol:
     ax.set_ylim(bottom=0.0)
     ax.grid(alpha=0.3)
     ax.legend()
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def plot_shaped_command(t, u, shaped: dict[str, np.ndarray], path, ylabel: str = "command") -> Path:
@@ -41,10 +41,11 @@ def plot_shaped_command(t, u, shaped: dict[str, np.ndarray], path, ylabel: str =
     ax.set_ylabel(ylabel)
     ax.grid(alpha=0.3)
     ax.legend()
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
-def _save(fig, path) -> Path:
+def save_figure(fig, path) -> Path:
+    """Write ``fig`` to ``path`` (its folder created), close it, and return the path."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.tight_layout()
@@ -66,4 +67,4 @@ def plot_motion_profile(profile, path, title: str = "") -> Path:
         ax.grid(alpha=0.3)
     axes[0].set_title(title)
     axes[-1].set_xlabel("time [s]")
-    return _save(fig, path)
+    return save_figure(fig, path)

@@ -31,7 +31,7 @@ from shapefmu.plants.model import Parameter, Plant
 
 
 @dataclass(frozen=True)
-class _Spec:
+class ParameterSpec:
     """A parameter of a kind: whether it is a list, required, and the units it may be given in
     with their factor to the unit the constructor takes (None: any non-empty unit is accepted)."""
 
@@ -43,38 +43,39 @@ class _Spec:
 _FREQUENCY = {"Hz": 2.0 * math.pi, "rad/s": 1.0}
 _LENGTH = {"m": 1.0, "in": library.INCH, "mm": 1e-3}
 
-# Per kind: parameter specs, and the builder taking the converted values (and the file's name).
-_KINDS = {
+# Per kind: its parameters' specs, name -> ParameterSpec (also read by the plant-FMU generator,
+# shapefmu.fmi.plantgen, to convert model-file units).
+PARAMETER_SPECS = {
     "rigid_flexible": {
-        "b2": _Spec(False),
-        "f": _Spec(True, units=_FREQUENCY),
-        "zeta": _Spec(True, units={"1": 1.0}),
-        "b4": _Spec(True),
-        "rigid_damping": _Spec(False, required=False, units={"1/s": 1.0}),
+        "b2": ParameterSpec(False),
+        "f": ParameterSpec(True, units=_FREQUENCY),
+        "zeta": ParameterSpec(True, units={"1": 1.0}),
+        "b4": ParameterSpec(True),
+        "rigid_damping": ParameterSpec(False, required=False, units={"1/s": 1.0}),
     },
     # Paper 002, Sec. I and Fig. 5: back EMF damps the rigid body by Kt^2/(R J).
     "voice_coil_flexible": {
-        "b2": _Spec(False),
-        "Kt": _Spec(False, units={"N*m/A": 1.0}),
-        "R": _Spec(False, units={"ohm": 1.0}),
-        "J": _Spec(False, units={"kg*m^2": 1.0}),
-        "f": _Spec(True, units=_FREQUENCY),
-        "zeta": _Spec(True, units={"1": 1.0}),
-        "b4": _Spec(True),
+        "b2": ParameterSpec(False),
+        "Kt": ParameterSpec(False, units={"N*m/A": 1.0}),
+        "R": ParameterSpec(False, units={"ohm": 1.0}),
+        "J": ParameterSpec(False, units={"kg*m^2": 1.0}),
+        "f": ParameterSpec(True, units=_FREQUENCY),
+        "zeta": ParameterSpec(True, units={"1": 1.0}),
+        "b4": ParameterSpec(True),
     },
-    "transfer_function": {"num": _Spec(True), "den": _Spec(True)},
+    "transfer_function": {"num": ParameterSpec(True), "den": ParameterSpec(True)},
     "pendula": {
-        "lengths": _Spec(True, units=_LENGTH),
-        "g": _Spec(False, required=False, units={"m/s^2": 1.0}),
-        "zeta": _Spec(False, required=False, units={"1": 1.0}),
+        "lengths": ParameterSpec(True, units=_LENGTH),
+        "g": ParameterSpec(False, required=False, units={"m/s^2": 1.0}),
+        "zeta": ParameterSpec(False, required=False, units={"1": 1.0}),
     },
     "mass_spring_chain": {
-        "masses": _Spec(True, units={"kg": 1.0}),
-        "springs": _Spec(True, units={"N/m": 1.0}),
-        "dampers": _Spec(True, required=False, units={"N*s/m": 1.0}),
+        "masses": ParameterSpec(True, units={"kg": 1.0}),
+        "springs": ParameterSpec(True, units={"N/m": 1.0}),
+        "dampers": ParameterSpec(True, required=False, units={"N*s/m": 1.0}),
     },
 }
-KINDS = tuple(_KINDS)
+KINDS = tuple(PARAMETER_SPECS)
 
 
 def _build(kind: str, p: dict, name: str, input_name: str, u_max) -> Plant:
@@ -100,7 +101,7 @@ def _finite(value, where):
     return float(value)
 
 
-def _parameter(raw, spec: _Spec, where: str):
+def _parameter(raw, spec: ParameterSpec, where: str):
     """(converted value for the constructor, Parameter as written in the file)."""
     if not isinstance(raw, dict) or "value" not in raw:
         raise ValueError(f"{where} must be a table {{ value = ..., unit = \"...\" }}, got {raw!r}")
@@ -152,10 +153,10 @@ def loads(text: str, source: str = "<string>") -> Plant:
     if extra:
         raise ValueError(f"{source}: unknown top-level field(s) {sorted(extra)}; allowed: {sorted(allowed)}")
     kind = data.get("kind")
-    if kind not in _KINDS:
-        raise ValueError(f"{source}: kind must be one of {list(_KINDS)}, got {kind!r}")
+    if kind not in PARAMETER_SPECS:
+        raise ValueError(f"{source}: kind must be one of {list(PARAMETER_SPECS)}, got {kind!r}")
     name = data.get("name", os.path.splitext(os.path.basename(source))[0])
-    specs = _KINDS[kind]
+    specs = PARAMETER_SPECS[kind]
     raw_parameters = data.get("parameters")
     if not isinstance(raw_parameters, dict):
         raise ValueError(f"{source}: [parameters] table is missing")

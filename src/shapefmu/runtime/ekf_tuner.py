@@ -17,30 +17,13 @@ the shaper is meant to spare. A command that never rests keeps its current shape
 unshaped); ``pending`` says that a design is waiting.
 """
 
-from . import impulse_formulas
 from .checks import check_count, check_positive
 from .ekf import ResonanceEKF
+from .shaper_designs import design_impulses
 from .shaper_filter import StreamingShaper
 
+# The closed-form kinds, cheap enough to re-design at every re-tune.
 KINDS = ("zv", "zvd", "zvdd", "zv_dn", "mzv")
-
-
-def design_impulses(kind, omega_n, zeta, n=1):
-    """Closed-form impulses ``(times, amplitudes)`` of shaper ``kind`` for the mode (omega_n, zeta).
-
-    ``n`` is used by ``zv_dn`` only (ZV convolved n+1 times).
-    """
-    if kind == "zv":
-        return impulse_formulas.zv_dn(omega_n, zeta, 0)
-    if kind == "zvd":
-        return impulse_formulas.zv_dn(omega_n, zeta, 1)
-    if kind == "zvdd":
-        return impulse_formulas.zv_dn(omega_n, zeta, 2)
-    if kind == "zv_dn":
-        return impulse_formulas.zv_dn(omega_n, zeta, n)
-    if kind == "mzv":
-        return impulse_formulas.mzv(omega_n, zeta)
-    raise ValueError(f"kind must be one of {', '.join(KINDS)}, got {kind!r}")
 
 
 class EKFTunedShaperKernel:
@@ -70,7 +53,7 @@ class EKFTunedShaperKernel:
     def _impulses(self, omega_n, zeta):
         if callable(self.kind):
             return self.kind(omega_n, zeta)
-        return design_impulses(self.kind, omega_n, zeta, self.n)
+        return design_impulses(self.kind, [(omega_n, zeta)], self.n)
 
     def observe(self, measurement):
         """Feed one vibration sample to the EKF; design a new shaper if the estimate calls for it."""

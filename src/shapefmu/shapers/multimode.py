@@ -13,26 +13,10 @@ from collections.abc import Callable, Sequence
 import numpy as np
 from scipy.optimize import least_squares
 
-from shapefmu.runtime.checks import check_omega, check_zeta
+from shapefmu.runtime.multimode import check_modes
 from shapefmu.shapers.impulse import ImpulseShaper, zv
 
 Mode = tuple[float, float]
-
-
-def check_modes(modes: Sequence[Mode], minimum: int = 1) -> list[Mode]:
-    """Validate a list of (omega, zeta) modes, naming the offending entry by its index."""
-    try:
-        pairs = [tuple(m) for m in modes]
-    except TypeError:
-        raise ValueError(f"modes must be a sequence of (omega, zeta) pairs, got {modes!r}") from None
-    if len(pairs) < minimum:
-        raise ValueError(f"modes must hold at least {minimum} (omega, zeta) pair(s), got {len(pairs)}")
-    checked = []
-    for i, pair in enumerate(pairs):
-        if len(pair) != 2:
-            raise ValueError(f"modes[{i}] must be an (omega, zeta) pair, got {pair!r}")
-        checked.append((check_omega(pair[0], f"modes[{i}] omega"), check_zeta(pair[1], f"modes[{i}] zeta")))
-    return checked
 
 
 def convolve_modes(

@@ -47,6 +47,7 @@ import numpy as np
 from scipy.optimize import bisect
 
 from shapefmu.runtime.checks import check_count, check_finite, check_omega, check_positive, check_vtol
+from shapefmu.runtime.twin_pulse import LAYOUT
 from shapefmu.shapers.profile import MotionProfile
 from shapefmu.shapers.sampled import SampledShaper
 
@@ -153,26 +154,14 @@ def _null_index(distance, speed, omega_tz):
     return max(1, math.ceil(ratio - 1e-12 * ratio))
 
 
-# Per kind: (twin pulse null, boxcar null, trapezoid null) as multiples of the offset
-# omega_n + s * delta_omega with s in {-1, 0, +1}, or None if the component is absent / not aligned.
-_LAYOUT = {
-    "TP": (0, None, None),
-    "TP:BC": (0, 0, None),
-    "M-TP:BC": (-1, +1, None),
-    "M-BC:TP": (+1, -1, None),
-    "BC:VR": (None, 0, None),
-    "BC:TZ": (None, 0, 0),
-    "M-BC:TZ": (None, -1, +1),
-    "M-TZ:BC": (None, +1, -1),
-    "M-BC:TZ:TP": (+1, -1, 0),
-    "M-TP:TZ:BC": (-1, +1, 0),
-}
-_MISALIGNED = tuple(kind for kind in _LAYOUT if kind.startswith("M-"))
+# LAYOUT, the runtime's table (one for both layers), gives per kind the (twin pulse, boxcar,
+# trapezoid) null at omega_n + s delta_omega, s in {-1, 0, +1}, or None if absent / not aligned.
+_MISALIGNED = tuple(kind for kind in LAYOUT if kind.startswith("M-"))
 
 
 def _times(kind, omega_n, distance, speed, delta_omega, tp_null, pulse_width):
     """(t_TP, t_BC, t_TZ, k, aligned) for a kind (eq. 2-4, 7-8, 11-17, 20-21)."""
-    s_tp, s_bc, s_tz = _LAYOUT[kind]
+    s_tp, s_bc, s_tz = LAYOUT[kind]
     t_tp = 0.0 if s_tp is None else (2 * tp_null - 1) * math.pi / (omega_n + s_tp * delta_omega)
     t_bc = pulse_width if s_bc is None else 2.0 * math.pi / (omega_n + s_bc * delta_omega)
     if s_tz is None:
@@ -231,7 +220,7 @@ def _offset_for(kind, omega_n, distance, speed, attenuation, tp_null):
     where it exceeds the request, and bisection refines that crossing: the widest notch whose
     centre still meets the attenuation.
     """
-    trapezoid_misaligned = bool(_LAYOUT[kind][2])  # +1 / -1; 0 (centred) and None are excluded
+    trapezoid_misaligned = bool(LAYOUT[kind][2])  # +1 / -1; 0 (centred) and None are excluded
 
     def excess(dw):
         t_tp, t_bc, t_tz, _, _ = _times(kind, omega_n, distance, speed, dw, tp_null, 0.0)

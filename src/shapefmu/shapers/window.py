@@ -24,44 +24,11 @@ import math
 
 import numpy as np
 
-from shapefmu.runtime.checks import check_count, check_finite, check_omega, check_positive, check_zeta
+from shapefmu.runtime.checks import check_count, check_finite
+from shapefmu.runtime.window_filters import damped_mode, window_length
 from shapefmu.shapers.sampled import SampledShaper
 
-# Relative tolerance on ts for "M is an integer": ts given to ~10 significant digits is accepted.
-_TS_RTOL = 1e-9
-
-
-# --- shared guards ---------------------------------------------------------------------------
-
-
-def _damped(omega_n, zeta):
-    """Validated (omega_n, zeta, omega_d) of the design point."""
-    omega_n = check_omega(omega_n, "omega_n")
-    zeta = check_zeta(zeta)
-    return omega_n, zeta, omega_n * math.sqrt(1.0 - zeta * zeta)
-
-
-def _length(omega_d, ts, adjust_ts, m_of_ts, ts_of_m, minimum, formula):
-    """The integer window length M for ``ts``, and the ts actually used.
-
-    ``m_of_ts`` gives the real M for a sampling period, ``ts_of_m`` its inverse; ``minimum`` is the
-    shortest window whose null is the design null (below it the null aliases onto a pole of the
-    window's transform). ``formula`` names the relation in error messages.
-    """
-    ts = check_positive(ts, "ts")
-    m_real = m_of_ts(omega_d * ts)
-    candidates = sorted({max(minimum, math.floor(m_real)), max(minimum, math.ceil(m_real))})
-    nearest = min(candidates, key=lambda m: abs(ts_of_m(m) / omega_d - ts))
-    ts_nearest = ts_of_m(nearest) / omega_d
-    if abs(ts_nearest - ts) <= _TS_RTOL * ts:
-        return nearest, ts
-    if adjust_ts:
-        return nearest, ts_nearest
-    options = ", ".join(f"{ts_of_m(m) / omega_d:.10g} s (M = {m})" for m in candidates)
-    raise ValueError(
-        f"ts = {ts!r} s gives M = {formula} = {m_real:.6g}, which is not an integer; valid ts make M an "
-        f"integer >= {minimum}, the nearest are {options}; or pass adjust_ts=True"
-    )
+# --- shared steps (the design point and window length are the runtime's, so the FMU agrees) ---
 
 
 def _shape(h, omega_n, zeta, ts, order):
@@ -94,7 +61,7 @@ _COSINE_WINDOWS = {
 
 def _cosine_base(name, omega_d, ts, adjust_ts):
     coefficients, m0, minimum = _COSINE_WINDOWS[name]
-    m, ts = _length(
+    m, ts = window_length(
         omega_d,
         ts,
         adjust_ts,
@@ -118,7 +85,7 @@ def _base(base, omega_d, ts, adjust_ts):
 
 def _rectangle_length(omega_d, ts, adjust_ts):
     # M equal samples k = 0..M-1 null every bin 2 pi m / M, m >= 1 (Zhou & Misawa 2005a).
-    return _length(
+    return window_length(
         omega_d, ts, adjust_ts, lambda u: 2.0 * math.pi / u, lambda m: 2.0 * math.pi / m, 2, "2*pi/(omega_d*ts)"
     )
 
@@ -164,7 +131,7 @@ def rectangle_filter(omega_n, zeta, ts, order=1, *, adjust_ts=False) -> SampledS
     >>> rectangle_filter(1.0, 0.0, math.pi / 100).taps.size
     200
     """
-    omega_n, zeta, omega_d = _damped(omega_n, zeta)
+    omega_n, zeta, omega_d = damped_mode(omega_n, zeta)
     m, ts = _rectangle_length(omega_d, ts, adjust_ts)
     return _shape(np.ones(m), omega_n, zeta, ts, order)
 
@@ -189,7 +156,7 @@ def hanning_filter(omega_n, zeta, ts, order=1, *, adjust_ts=False) -> SampledSha
     >>> hanning_filter(1.0, 0.0, math.pi / 100).taps.size  # M + 1 with M = 400
     401
     """
-    omega_n, zeta, omega_d = _damped(omega_n, zeta)
+    omega_n, zeta, omega_d = damped_mode(omega_n, zeta)
     h, ts = _cosine_base("hanning", omega_d, ts, adjust_ts)
     return _shape(h, omega_n, zeta, ts, order)
 
@@ -209,7 +176,7 @@ def blackman_filter(omega_n, zeta, ts, order=1, *, adjust_ts=False) -> SampledSh
     ----------
     Paper 000, section 4.
     """
-    omega_n, zeta, omega_d = _damped(omega_n, zeta)
+    omega_n, zeta, omega_d = damped_mode(omega_n, zeta)
     h, ts = _cosine_base("blackman", omega_d, ts, adjust_ts)
     return _shape(h, omega_n, zeta, ts, order)
 
@@ -230,7 +197,7 @@ def hamming_filter(omega_n, zeta, ts, order=1, *, adjust_ts=False) -> SampledSha
     ----------
     Paper 000, section 5.
     """
-    omega_n, zeta, omega_d = _damped(omega_n, zeta)
+    omega_n, zeta, omega_d = damped_mode(omega_n, zeta)
     h, ts = _cosine_base("hamming", omega_d, ts, adjust_ts)
     return _shape(h, omega_n, zeta, ts, order)
 
@@ -241,7 +208,7 @@ def hamming_null_depth(omega_n, zeta, ts, *, adjust_ts=False) -> float:
     Equals 4 / (25 M + 4) (see :func:`hamming_filter`); for zeta = 0 this is also the percent
     residual vibration of the order-1 Hamming filter at the design point.
     """
-    _, _, omega_d = _damped(omega_n, zeta)
+    _, _, omega_d = damped_mode(omega_n, zeta)
     h, ts = _cosine_base("hamming", omega_d, ts, adjust_ts)
     k = np.arange(h.size)
     return float(abs(np.sum(h * np.exp(-1j * omega_d * ts * k))) / h.sum())
@@ -285,11 +252,11 @@ def three_hanning_filter(omega_n, zeta, ts, order=1, *, c=0.25, adjust_ts=False)
     ----------
     Paper 000, section 7, eq. (6).
     """
-    omega_n, zeta, omega_d = _damped(omega_n, zeta)
+    omega_n, zeta, omega_d = damped_mode(omega_n, zeta)
     c = check_finite(c, "c")
     if c < 0.0:
         raise ValueError(f"c must be >= 0, got {c!r}")
-    m, ts = _length(
+    m, ts = window_length(
         omega_d,
         ts,
         adjust_ts,
@@ -325,7 +292,7 @@ def differenced_filter(
     ----------
     Paper 000, section 8.1, Figs. 8-9.
     """
-    omega_n, zeta, omega_d = _damped(omega_n, zeta)
+    omega_n, zeta, omega_d = damped_mode(omega_n, zeta)
     k1, k2 = check_finite(k1, "k1"), check_finite(k2, "k2")
     g, ts = _base(base, omega_d, ts, adjust_ts)
     padded = np.append(g, 0.0)
@@ -357,7 +324,7 @@ def convolved_filter(
     ----------
     Paper 000, section 8.2, Figs. 10-11.
     """
-    omega_n, zeta, omega_d = _damped(omega_n, zeta)
+    omega_n, zeta, omega_d = damped_mode(omega_n, zeta)
     k1, k2 = check_finite(k1, "k1"), check_finite(k2, "k2")
     g, ts = _base(base, omega_d, ts, adjust_ts)
     gg = np.convolve(g, g)

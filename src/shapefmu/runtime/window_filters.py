@@ -1,0 +1,231 @@
+"""Window-function shape filters (Zhou & Misawa, paper 000), standard library only.
+
+The taps a ShapeFilter FMU computes at initialisation from its parameters. Same construction, same
+guards and same error messages as the design layer (``shapefmu.shapers.window``, numpy), whose
+docstrings carry the derivations; ``tests/test_runtime_profiles.py`` checks the taps agree.
+
+A base sequence h[k] with H(omega_d Ts) = 0 becomes the filter for the mode (omega_n, zeta) by
+damping compensation and normalisation (paper 000, Conclusion 2.1 and section 3),
+
+    f[k] = h[k] e^{-zeta omega_n k Ts} / sum_m h[m] e^{-zeta omega_n m Ts},
+
+and robustness order n is its n-fold self-convolution (eq. 1).
+
+Every function has the signature ``name(omega_n, zeta, ts, order=1, *, adjust_ts=False, ...)`` and
+returns ``(taps, ts)``: a list of floats summing to 1 and the sampling period actually used. The
+window length M follows from omega_d ts and must be an integer: a ts that does not make it one
+raises ValueError naming the nearest valid periods, unless ``adjust_ts`` picks the nearest.
+"""
+
+import math
+
+from .checks import check_count, check_finite, check_omega, check_positive, check_zeta
+
+# Relative tolerance on ts for "M is an integer": ts given to ~10 significant digits is accepted.
+_TS_RTOL = 1e-9
+
+
+def damped_mode(omega_n, zeta):
+    """Validated (omega_n, zeta, omega_d) of the design point."""
+    omega_n = check_omega(omega_n, "omega_n")
+    zeta = check_zeta(zeta)
+    return omega_n, zeta, omega_n * math.sqrt(1.0 - zeta * zeta)
+
+
+def window_length(omega_d, ts, adjust_ts, m_of_ts, ts_of_m, minimum, formula):
+    """The integer window length M for ``ts``, and the ts actually used.
+
+    ``m_of_ts`` gives the real M for a sampling period, ``ts_of_m`` its inverse; ``minimum`` is the
+    shortest window whose null is the design null (below it the null aliases onto a pole of the
+    window's transform). ``formula`` names the relation in error messages.
+    """
+    ts = check_positive(ts, "ts")
+    m_real = m_of_ts(omega_d * ts)
+    candidates = sorted({max(minimum, math.floor(m_real)), max(minimum, math.ceil(m_real))})
+    nearest = min(candidates, key=lambda m: abs(ts_of_m(m) / omega_d - ts))
+    ts_nearest = ts_of_m(nearest) / omega_d
+    if abs(ts_nearest - ts) <= _TS_RTOL * ts:
+        return nearest, ts
+    if adjust_ts:
+        return nearest, ts_nearest
+    options = ", ".join(f"{ts_of_m(m) / omega_d:.10g} s (M = {m})" for m in candidates)
+    raise ValueError(
+        f"ts = {ts!r} s gives M = {formula} = {m_real:.6g}, which is not an integer; valid ts make M an "
+        f"integer >= {minimum}, the nearest are {options}; or pass adjust_ts=True"
+    )
+
+
+def convolve(a, b):
+    """Full discrete convolution of two sequences (length len(a) + len(b) - 1)."""
+    out = [0.0] * (len(a) + len(b) - 1)
+    for i, x in enumerate(a):
+        if x:
+            for j, y in enumerate(b):
+                out[i + j] += x * y
+    return out
+
+
+def _shape(h, omega_n, zeta, ts, order):
+    """Damping compensation and normalisation (section 3), then order n by eq. (1)."""
+    order = check_count(order, "order", 1)
+    f = [v * math.exp(-zeta * omega_n * k * ts) for k, v in enumerate(h)]
+    total = math.fsum(f)
+    f = [v / total for v in f]
+    out = f
+    for _ in range(order - 1):
+        out = convolve(out, f)
+    return out, ts
+
+
+def _cosine_window(m, coefficients):
+    """sum_i c_i cos(2 pi i k / M), k = 0..M (eq. 2 and the Blackman / Hamming forms)."""
+    return [
+        math.fsum(c * math.cos(2.0 * math.pi * i * k / m) for i, c in enumerate(coefficients)) for k in range(m + 1)
+    ]
+
+
+# (coefficients, null at omega_d Ts = 2 pi m0 / M, smallest M), as in shapers.window.
+_COSINE_WINDOWS = {
+    "hanning": ((0.5, -0.5), 2, 4),
+    "blackman": ((0.42, -0.5, 0.08), 3, 6),
+    "hamming": ((25.0 / 46.0, -21.0 / 46.0), 2, 4),
+}
+
+
+def _cosine_base(name, omega_d, ts, adjust_ts):
+    coefficients, m0, minimum = _COSINE_WINDOWS[name]
+    m, ts = window_length(
+        omega_d,
+        ts,
+        adjust_ts,
+        lambda u: 2.0 * math.pi * m0 / u,
+        lambda m: 2.0 * math.pi * m0 / m,
+        minimum,
+        f"{2 * m0}*pi/(omega_d*ts)",
+    )
+    return _cosine_window(m, coefficients), ts
+
+
+def _rectangle_length(omega_d, ts, adjust_ts):
+    return window_length(
+        omega_d, ts, adjust_ts, lambda u: 2.0 * math.pi / u, lambda m: 2.0 * math.pi / m, 2, "2*pi/(omega_d*ts)"
+    )
+
+
+def _base(base, omega_d, ts, adjust_ts):
+    """A symmetric base g with G(omega_d Ts) = 0, for the non-symmetric constructions (section 8)."""
+    if base == "rectangle":
+        m, ts = _rectangle_length(omega_d, ts, adjust_ts)
+        return [1.0] * m, ts
+    if base in ("hanning", "blackman"):
+        return _cosine_base(base, omega_d, ts, adjust_ts)
+    raise ValueError(f"base must be one of 'rectangle', 'hanning', 'blackman', got {base!r}")
+
+
+def _check_gain(h, name):
+    # The filter is normalised by the sum of its samples, which the weights can cancel.
+    if abs(math.fsum(h)) <= 1e-9 * math.fsum(abs(v) for v in h):
+        raise ValueError(f"{name} and k2 make the base sum to 0; the filter cannot be normalised")
+
+
+def rectangle_filter(omega_n, zeta, ts, order=1, *, adjust_ts=False):
+    """Rectangle window: M equal samples, M = 2 pi / (omega_d Ts) (paper 000, section 1)."""
+    omega_n, zeta, omega_d = damped_mode(omega_n, zeta)
+    m, ts = _rectangle_length(omega_d, ts, adjust_ts)
+    return _shape([1.0] * m, omega_n, zeta, ts, order)
+
+
+def hanning_filter(omega_n, zeta, ts, order=1, *, adjust_ts=False):
+    """Hanning window h[k] = 0.5 - 0.5 cos(2 pi k / M), M = 4 pi / (omega_d Ts) (eq. 2)."""
+    omega_n, zeta, omega_d = damped_mode(omega_n, zeta)
+    h, ts = _cosine_base("hanning", omega_d, ts, adjust_ts)
+    return _shape(h, omega_n, zeta, ts, order)
+
+
+def blackman_filter(omega_n, zeta, ts, order=1, *, adjust_ts=False):
+    """Blackman window 0.42 - 0.5 cos(2 pi k/M) + 0.08 cos(4 pi k/M), M = 6 pi / (omega_d Ts) (section 4)."""
+    omega_n, zeta, omega_d = damped_mode(omega_n, zeta)
+    h, ts = _cosine_base("blackman", omega_d, ts, adjust_ts)
+    return _shape(h, omega_n, zeta, ts, order)
+
+
+def hamming_filter(omega_n, zeta, ts, order=1, *, adjust_ts=False):
+    """Hamming window 25/46 - 21/46 cos(2 pi k / M), approximate null, M = 4 pi / (omega_d Ts) (section 5)."""
+    omega_n, zeta, omega_d = damped_mode(omega_n, zeta)
+    h, ts = _cosine_base("hamming", omega_d, ts, adjust_ts)
+    return _shape(h, omega_n, zeta, ts, order)
+
+
+def _three_hanning_u(m, c):
+    """omega_d Ts for an integer M (section 7; the OCR's left side is cos(omega_d Ts), see shapers.window)."""
+    x = math.cos(math.pi / m)
+    return 2.0 * math.asin(math.sin(math.pi / m) * math.sqrt((c + 1.0) / (2.0 * c * x + 2.0 * c + 1.0)))
+
+
+def _three_hanning_m(u, c):
+    """Eq. (6): M = pi / arccos[(C cos u - C + sqrt(B)) / (2C + 2)], u = omega_d Ts."""
+    y = math.cos(u)
+    b = c * c * y * y + 2 * c * c * y + c * c + 2 * c + 6 * c * y + 2 + 2 * y
+    return math.pi / math.acos(min(1.0, (c * y - c + math.sqrt(b)) / (2 * c + 2)))
+
+
+def three_hanning_filter(omega_n, zeta, ts, order=1, *, c=0.25, adjust_ts=False):
+    """Sum of three Hanning windows with weight C (section 7, eq. 6) on 0 <= k <= 2M."""
+    omega_n, zeta, omega_d = damped_mode(omega_n, zeta)
+    c = check_finite(c, "c")
+    if c < 0.0:
+        raise ValueError(f"c must be >= 0, got {c!r}")
+    m, ts = window_length(
+        omega_d,
+        ts,
+        adjust_ts,
+        lambda u: _three_hanning_m(u, c),
+        lambda m: _three_hanning_u(m, c),
+        2,
+        "eq. (6) of paper 000",
+    )
+    h = [
+        0.5 - 0.5 * math.cos(math.pi * k / m) + c * (0.5 - 0.5 * math.cos(2.0 * math.pi * k / m))
+        for k in range(2 * m + 1)
+    ]
+    return _shape(h, omega_n, zeta, ts, order)
+
+
+def differenced_filter(omega_n, zeta, ts, order=1, *, k1=1.0, k2=-25.0, base="hanning", adjust_ts=False):
+    """h = k1 g + k2 dg, dg[k] = g[k] - g[k-1] on 0 <= k <= M + 1 (section 8.1)."""
+    omega_n, zeta, omega_d = damped_mode(omega_n, zeta)
+    k1, k2 = check_finite(k1, "k1"), check_finite(k2, "k2")
+    g, ts = _base(base, omega_d, ts, adjust_ts)
+    padded = g + [0.0]
+    h = [k1 * v + k2 * (v - (padded[k - 1] if k else 0.0)) for k, v in enumerate(padded)]
+    _check_gain(h, "k1")
+    return _shape(h, omega_n, zeta, ts, order)
+
+
+def convolved_filter(omega_n, zeta, ts, order=1, *, k1=1.0, k2=1.0 / 125.0, k0=None, base="hanning", adjust_ts=False):
+    """h = k1 g[k - k0] + k2 (g * g)[k] (section 8.2); k0 defaults to M."""
+    omega_n, zeta, omega_d = damped_mode(omega_n, zeta)
+    k1, k2 = check_finite(k1, "k1"), check_finite(k2, "k2")
+    g, ts = _base(base, omega_d, ts, adjust_ts)
+    gg = convolve(g, g)
+    m = len(g) - 1
+    k0 = m if k0 is None else check_count(k0, "k0", 0)
+    if k0 > len(gg) - len(g):
+        raise ValueError(f"k0 must be an integer in [0, {len(gg) - len(g)}], got {k0!r}")
+    h = [k2 * v for v in gg]
+    for k, v in enumerate(g):
+        h[k0 + k] += k1 * v
+    _check_gain(h, "k1")
+    return _shape(h, omega_n, zeta, ts, order)
+
+
+#: Design functions by kind, the names the design layer and the ShapeFilter FMU's ``kind`` use.
+WINDOW_FILTERS = {
+    "rectangle": rectangle_filter,
+    "hanning": hanning_filter,
+    "blackman": blackman_filter,
+    "hamming": hamming_filter,
+    "three-hanning": three_hanning_filter,
+    "differenced": differenced_filter,
+    "convolved": convolved_filter,
+}
