@@ -1,0 +1,95 @@
+"""Microseconds per fmi2DoStep through fmpy: an empty pythonfmu FMU (the floor), our FMUs, and the
+same runtime kernel called directly in Python. Goal: the Shaper FMU within 2x of the floor.
+
+Each FMU is stepped N times with fmpy's low-level API (setReal u, doStep, getReal y: what a master
+does per step); the kernel is StreamingShaper.step on the same ZVD design and on the ShapeFilter's
+Hanning taps (400 of them: its cost grows with the taps, the FMU's overhead does not).
+"""
+
+import math
+import tempfile
+import textwrap
+import time
+from pathlib import Path
+
+from fmpy import extract, read_model_description
+from fmpy.fmi2 import FMU2Slave
+from pythonfmu import FmuBuilder
+
+from shapefmu.fmi import build_fmu
+from shapefmu.runtime.impulse_formulas import zv_dn
+from shapefmu.runtime.shaper_filter import StreamingShaper
+from shapefmu.runtime.window_filters import hanning_filter
+
+N = 20000
+H = 1e-4
+
+EMPTY_SLAVE = textwrap.dedent(
+    '''
+    from pythonfmu import Fmi2Slave, Fmi2Causality, Real
+
+    class Empty(Fmi2Slave):
+        def __init__(self, **kwargs):
+            super().__init__(**kwargs)
+            self.u = 0.0
+            self.y = 0.0
+            self.register_variable(Real("u", causality=Fmi2Causality.input))
+            self.register_variable(Real("y", causality=Fmi2Causality.output))
+
+        def do_step(self, current_time, step_size):
+            return True
+    '''
+)
+
+
+def per_step_fmu(path):
+    md = read_model_description(str(path))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    fmu = FMU2Slave(guid=md.guid, unzipDirectory=extract(str(path)), modelIdentifier=md.coSimulation.modelIdentifier,
+                    instanceName="bench")
+    fmu.instantiate()
+    fmu.setupExperiment(startTime=0.0)
+    fmu.enterInitializationMode()
+    fmu.exitInitializationMode()
+    u, y = [vr["u"]], [vr["y"]]
+    start = time.perf_counter()
+    for k in range(N):
+        fmu.setReal(u, [math.sin(1e-3 * k)])
+        fmu.doStep(k * H, H)
+        fmu.getReal(y)
+    elapsed = time.perf_counter() - start
+    fmu.terminate()
+    fmu.freeInstance()
+    return 1e6 * elapsed / N
+
+
+def per_step_kernel(kernel):
+    start = time.perf_counter()
+    for k in range(N):
+        kernel.step(math.sin(1e-3 * k))
+    return 1e6 * (time.perf_counter() - start) / N
+
+
+def main():
+    with tempfile.TemporaryDirectory() as temp:
+        temp = Path(temp)
+        script = temp / "empty_slave.py"
+        script.write_text(EMPTY_SLAVE)
+        empty = FmuBuilder.build_FMU(script, dest=temp / "Empty.fmu")
+        shaper = build_fmu("Shaper", temp / "Shaper.fmu", kind="zvd", **{"f[1]": 100.0, "zeta[1]": 0.02, "Ts": H})
+        floor = per_step_fmu(empty)
+        shape_filter = build_fmu("ShapeFilter", temp / "ShapeFilter.fmu", kind="hanning", f=100.0, order=2, Ts=H)
+        ours = {"Shaper (ZVD, 100 Hz)": per_step_fmu(shaper), "ShapeFilter (Hanning n=2, 100 Hz)": per_step_fmu(shape_filter)}
+        kernel = per_step_kernel(StreamingShaper.from_impulses(*zv_dn(2 * math.pi * 100.0, 0.02, 1), H))
+        filter_taps, _ = hanning_filter(2 * math.pi * 100.0, 0.0, H, 2)
+        filter_kernel = per_step_kernel(StreamingShaper.from_taps(filter_taps))
+    print(f"{'empty pythonfmu FMU (floor)':34s} {floor:8.2f} us/step")
+    for name, value in ours.items():
+        goal = " (goal <= 2)" if name.startswith("Shaper ") else ""  # the goal is set for the shaper FMU
+        print(f"{name:34s} {value:8.2f} us/step   {value / floor:5.2f} x floor{goal}")
+    print(f"{'StreamingShaper.step directly':34s} {kernel:8.2f} us/step   {kernel / floor:5.2f} x floor")
+    print(f"{'  same on the Hanning n=2 taps':34s} {filter_kernel:8.2f} us/step   {filter_kernel / floor:5.2f} x floor")
+
+
+if __name__ == "__main__":
+    main()

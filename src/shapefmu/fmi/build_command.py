@@ -1,0 +1,128 @@
+"""``shapefmu build``: FMUs into fmus/ (all of them, or one with a design baked in as start values).
+
+    shapefmu build [all] [-o DIR]
+    shapefmu build shaper --kind simultaneous --mode 2000:0.01 --mode 3000:0.01 [--ts S] -o fmus/DiskDriveShaper.fmu
+    shapefmu build reference solution.json [--interpolation hold|linear] -o fmus/TimeOptimal.fmu
+    shapefmu build shape-filter --kind hanning --mode 10:0.05 --order 2 [--ts S] -o fmus/HanningFilter.fmu
+
+Targets are registered in ``TARGETS``: a name -> (help, add_arguments(parser), build(args) -> [paths]).
+Another target (e.g. ``reference solution.json -o fmus/TimeOptimal.fmu``) is one more entry.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+from shapefmu.fmi.builder import build_all, build_fmu
+from shapefmu.fmi.slaves.shaper import KINDS, MAX_MODES
+
+
+def _add_all(parser):
+    parser.add_argument("-o", "--out", default="fmus", help="output directory (default fmus/)")
+    parser.add_argument("--models", default="models", help="plant models to build as native FMUs (default models/)")
+
+
+def _build_all(args):
+    from shapefmu.fmi.plantgen import build_all as build_all_plants
+
+    return [*build_all(args.out), *build_all_plants(args.models, args.out)]
+
+
+def _add_shaper(parser):
+    from shapefmu.cli import parse_mode
+
+    parser.add_argument("--kind", choices=KINDS, default="zvd", help="shaper design (default zvd)")
+    parser.add_argument("--mode", type=parse_mode, action="append", required=True, metavar="HZ[:ZETA]",
+                        help=f"mode frequency in Hz and damping ratio; up to {MAX_MODES}")
+    parser.add_argument("--n", type=int, default=1, help="derivative order of zv_dn (default 1)")
+    parser.add_argument("--vtol", type=float, default=0.05, help="tolerable vibration (default 0.05)")
+    parser.add_argument("--ts", type=float, help="filter sampling period in s (default: 1/100 of the highest mode's period)")
+    parser.add_argument("-o", "--out", default="fmus/Shaper.fmu", help="FMU file (default fmus/Shaper.fmu)")
+
+
+def _build_shaper(args):
+    if len(args.mode) > MAX_MODES:
+        raise ValueError(f"--mode may be given at most {MAX_MODES} times, got {len(args.mode)}")
+    starts = {"kind": args.kind, "n": args.n, "vtol": args.vtol, "n_modes": len(args.mode)}
+    for i, (omega, zeta) in enumerate(args.mode, start=1):
+        starts[f"f[{i}]"] = omega / (2.0 * math.pi)
+        starts[f"zeta[{i}]"] = zeta
+    starts["Ts"] = args.ts if args.ts is not None else 2.0 * math.pi / max(w for w, _ in args.mode) / 100.0
+    return [build_fmu("Shaper", Path(args.out), **starts)]
+
+
+def _add_reference(parser):
+    parser.add_argument("table", help="signal table: a TimeOptimalSolution .json (shapefmu optimal) or a time,value .csv")
+    parser.add_argument("--interpolation", choices=("hold", "linear"), default="hold",
+                        help="how a .csv table is read between rows (default hold, as TimeOptimalSolution.to_csv)")
+    parser.add_argument("-o", "--out", default="fmus/ReferencePlayer.fmu", help="FMU file (default fmus/ReferencePlayer.fmu)")
+
+
+def _build_reference(args):
+    import json
+
+    from shapefmu.runtime import reference_player
+
+    try:
+        table = reference_player.load(args.table, args.interpolation)
+    except OSError as error:
+        raise ValueError(f"cannot read table {args.table}: {error.strerror}") from None
+    if str(args.table).lower().endswith(".json"):
+        text = Path(args.table).read_text(encoding="utf-8")  # keep the solution's own fields
+    else:
+        text = json.dumps(table.to_dict())
+    return [build_fmu("ReferencePlayer", Path(args.out), table=text)]
+
+
+def _add_shape_filter(parser):
+    from shapefmu.cli import parse_mode
+    from shapefmu.fmi.slaves.shape_filter import BASES, KINDS as FILTER_KINDS
+
+    parser.add_argument("--kind", choices=FILTER_KINDS, default="hanning", help="filter design (default hanning)")
+    parser.add_argument("--mode", type=parse_mode, required=True, metavar="HZ[:ZETA]",
+                        help="mode frequency in Hz and damping ratio (damping: window filters only)")
+    parser.add_argument("--order", type=int, help="robustness order n of a window filter (default 1)")
+    parser.add_argument("--ts", type=float, help="filter sampling period in s (default 1e-3)")
+    parser.add_argument("--adjust-ts", action="store_true", help="window filters: use the nearest Ts that makes M whole")
+    parser.add_argument("--c", type=float, help="three-hanning side weight C (default 0.25)")
+    parser.add_argument("--base", choices=BASES, help="base window of differenced / convolved (default hanning)")
+    parser.add_argument("--delta-f", type=float, help="null mis-alignment of the M- twin-pulse kinds, Hz")
+    parser.add_argument("--null", type=int, help="TP:BC twin-pulse null index k (default 2)")
+    parser.add_argument("--move-time", type=float, help="time-frequency move time, a whole number of Ts (default 0.1 s)")
+    parser.add_argument("-o", "--out", default="fmus/ShapeFilter.fmu", help="FMU file (default fmus/ShapeFilter.fmu)")
+
+
+def _build_shape_filter(args):
+    omega, zeta = args.mode
+    starts = {"kind": args.kind, "f": omega / (2.0 * math.pi), "zeta": zeta, "adjust_Ts": args.adjust_ts}
+    given = {"order": args.order, "Ts": args.ts, "c": args.c, "base": args.base, "delta_f": args.delta_f,
+             "null": args.null, "move_time": args.move_time}
+    starts.update({name: value for name, value in given.items() if value is not None})
+    return [build_fmu("ShapeFilter", Path(args.out), **starts)]
+
+
+TARGETS = {
+    "all": ("every FMU with its default parameters", _add_all, _build_all),
+    "shaper": ("the Shaper FMU with a design baked in", _add_shaper, _build_shaper),
+    "reference": ("the ReferencePlayer FMU playing a signal table", _add_reference, _build_reference),
+    "shape-filter": ("the ShapeFilter FMU with a sampled design baked in", _add_shape_filter, _build_shape_filter),
+}
+
+
+def add_build_command(commands) -> None:
+    """Register ``build`` and its targets on the main parser's subcommands."""
+    p = commands.add_parser("build", help="build FMUs (default: all of them into fmus/)")
+    _add_all(p)
+    p.set_defaults(run=lambda args: _run(args, "all"))
+    targets = p.add_subparsers(dest="target")
+    for name, (text, add_arguments, _) in TARGETS.items():
+        q = targets.add_parser(name, help=text)
+        add_arguments(q)
+        q.set_defaults(run=lambda args, name=name: _run(args, name))
+
+
+def _run(args, target):
+    for path in TARGETS[target][2](args):
+        print(f"built {path}")
+    return 0

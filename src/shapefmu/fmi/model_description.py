@@ -1,0 +1,119 @@
+"""modelDescription.xml for a shapefmu slave (FMI 2.0 co-simulation), written from the slave itself.
+
+pythonfmu's generator is not used: it lists outputs without dependencies, omits InitialUnknowns and
+units, and declares state handling off. Here every variable carries its unit and description,
+ModelStructure gives each output's real dependencies (``Fmi2Slave.output_dependencies``, computed
+from the design the start values produce) and the InitialUnknowns, and the capability flags say what
+the FMU does: no external tool, state get/set and serialisation.
+"""
+
+import datetime
+from xml.dom import minidom
+from xml.etree.ElementTree import Element, SubElement, tostring
+
+from shapefmu import __version__
+from shapefmu.fmi.slave_base import UNITS
+
+
+def _number(value):
+    return repr(float(value)) if isinstance(value, float) else str(value)
+
+
+def model_description(slave, guid, dependencies, experiment, pythonfmu_version):
+    """The XML text for ``slave`` (an initialised instance) with the given GUID.
+
+    ``dependencies`` maps each output to the inputs it feeds through from; ``experiment`` is
+    (start, stop, step) for the DefaultExperiment.
+    """
+    root = Element(
+        "fmiModelDescription",
+        {
+            "fmiVersion": "2.0",
+            "modelName": slave.model_name,
+            "guid": guid,
+            "description": slave.description,
+            "generationTool": f"shapefmu {__version__} (pythonfmu {pythonfmu_version} export library)",
+            "generationDateAndTime": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
+            "variableNamingConvention": "structured",
+            "numberOfEventIndicators": "0",
+        },
+    )
+    SubElement(
+        root,
+        "CoSimulation",
+        {
+            "modelIdentifier": slave.model_name,
+            "needsExecutionTool": "false",
+            "canHandleVariableCommunicationStepSize": "true",
+            "canInterpolateInputs": "false",
+            "maxOutputDerivativeOrder": "0",
+            "canRunAsynchronuously": "false",
+            "canBeInstantiatedOnlyOncePerProcess": "false",
+            "canNotUseMemoryManagementFunctions": "true",
+            "canGetAndSetFMUstate": "true",
+            "canSerializeFMUstate": "true",
+            "providesDirectionalDerivative": "false",
+        },
+    )
+    used = sorted({v.unit for v in slave.variables if v.type == "Real"})
+    units = SubElement(root, "UnitDefinitions")
+    for name in used:
+        unit = SubElement(units, "Unit", {"name": name})
+        if UNITS[name]:
+            SubElement(unit, "BaseUnit", {k: str(e) for k, e in UNITS[name].items()})
+    categories = SubElement(root, "LogCategories")
+    for name, text in (
+        ("logStatusWarning", "Warnings"),
+        ("logStatusError", "Errors: bad parameters, non-finite inputs, calls out of order"),
+        ("logStatusFatal", "Failures of the embedded Python runtime"),
+        ("logAll", "Everything else (debug logging)"),
+    ):
+        SubElement(categories, "Category", {"name": name, "description": text})
+    start, stop, step = experiment
+    SubElement(root, "DefaultExperiment", {"startTime": _number(start), "stopTime": _number(stop), "stepSize": _number(step)})
+    variables = SubElement(root, "ModelVariables")
+    for var in slave.variables:
+        attributes = {
+            "name": var.name,
+            "valueReference": str(var.vr),
+            "description": var.description,
+            "causality": var.causality,
+            "variability": var.variability,
+        }
+        if var.causality == "parameter":
+            attributes["initial"] = "exact"
+        elif var.causality == "output":
+            attributes["initial"] = "calculated"
+        node = SubElement(variables, "ScalarVariable", attributes)
+        typed = {}
+        if var.causality != "output":
+            start_value = slave.values[var.name]
+            typed["start"] = ("true" if start_value else "false") if var.type == "Boolean" else _number(start_value)
+        if var.type == "Real":
+            typed["unit"] = var.unit
+        if var.type in ("Real", "Integer"):
+            if var.minimum is not None:
+                typed["min"] = _number(var.minimum)
+            if var.maximum is not None:
+                typed["max"] = _number(var.maximum)
+        SubElement(node, var.type, typed)
+    index = {var.name: var.vr + 1 for var in slave.variables}  # ModelStructure indices are 1-based
+    parameters = [index[v.name] for v in slave.variables if v.causality == "parameter"]
+    structure = SubElement(root, "ModelStructure")
+    outputs = [v for v in slave.variables if v.causality == "output"]
+    if outputs:
+        node = SubElement(structure, "Outputs")
+        for var in outputs:
+            inputs = sorted(index[name] for name in dependencies[var.name])
+            attributes = {"index": str(index[var.name]), "dependencies": " ".join(map(str, inputs))}
+            if inputs:
+                # The feed-through factor (e.g. the first impulse's amplitude) is fixed at initialisation.
+                attributes["dependenciesKind"] = " ".join("fixed" for _ in inputs)
+            SubElement(node, "Unknown", attributes)
+        node = SubElement(structure, "InitialUnknowns")
+        for var in outputs:
+            # At initialisation the design itself depends on every parameter.
+            inputs = sorted(parameters + [index[name] for name in dependencies[var.name]])
+            SubElement(node, "Unknown", {"index": str(index[var.name]), "dependencies": " ".join(map(str, inputs))})
+    text = minidom.parseString(tostring(root, encoding="unicode")).toprettyxml(indent="  ", encoding="UTF-8")
+    return text.decode("utf-8")

@@ -1,0 +1,398 @@
+"""The common base of every shapefmu FMU slave: variables, call order, errors, state, logging.
+
+Bundled into every FMU (standard library only), where pythonfmu's export library drives it: the
+library finds the slave class by the name ``Fmi2Slave`` in its bases and calls the methods below
+(``set_real``, ``do_step``, ``_get_fmu_state``, ...). pythonfmu's own Python package is not needed
+at run time.
+
+What the base guarantees for every FMU built on it:
+
+- every variable has a unit and a description (``declare`` refuses one without);
+- a bad call never raises into the host: wrong value reference or type, a parameter set after
+  initialisation, a NaN input, a step at the wrong time, an invalid design... are logged through the
+  FMI logger with status fmi2Error and the call returns normally; the FMU's C front end
+  (``shim/fmi2_shim.c``) turns the call into fmi2Error, and the instance stays usable. Every method
+  the export library calls catches what the slave's hooks raise: pythonfmu 0.7.0 answers an
+  escaping exception with fmi2Fatal and releases the instance's Python objects twice (the front
+  end then stops forwarding to it, at the cost of a small leak);
+- parameters are validated at the exit of initialisation (``initialize``), where the design runs;
+- NaN / inf inputs make the next ``fmi2DoStep`` fail with fmi2Error, leaving the state untouched;
+- ``fmi2GetFMUstate`` / ``fmi2SetFMUstate`` and serialisation restore exactly: all variables, the
+  time, the phase, and the kernel objects named in ``state_attributes`` (ring buffers, covariances)
+  through ``state_codec``.
+
+How to add an FMU (one module and one registry line):
+
+1. Write ``shapefmu/fmi/slaves/<module>.py`` with one class deriving from ``Fmi2Slave``. Import only
+   the standard library, ``..slave_base`` and ``...runtime`` (relative imports: the module is
+   bundled under a package name unique to the build). Set the class attributes ``model_name``,
+   ``description``, ``default_experiment`` (start, stop, step), ``kernels`` (the runtime classes
+   that may appear in the state) and ``state_attributes`` (the attribute names holding them).
+2. ``declare(self)``: call ``self.parameter(...)``, ``self.input(...)``, ``self.output(...)`` for every
+   variable, each with a unit (``"1"`` for dimensionless) and a description. Structured names such
+   as ``f[1]`` are fine. Units other than ``1``, ``s``, ``Hz``, ``rad/s``, ``m``, ``m/s``, ``m/s2``
+   need a line in ``UNITS``.
+3. ``initialize(self)``: validate the parameters with ``runtime.checks`` (raise ValueError naming
+   the parameter, value and valid range) and build the kernels. It runs at the exit of
+   initialisation and again after ``fmi2Reset``.
+4. ``step(self, t, h)``: advance the kernels over [t, t + h) and set the outputs. Raise ValueError
+   for a step the FMU cannot honour. Inputs are already checked for NaN.
+5. ``output_dependencies(self)``: after ``initialize``, ``{output: [inputs it feeds through from]}``;
+   the builder writes it into ModelStructure (and InitialUnknowns).
+6. Add ``"<ModelName>": "<module>"`` to ``SLAVES`` in ``shapefmu/fmi/slaves/__init__.py``; then
+   ``shapefmu.fmi.build_fmu("<ModelName>", path, **start_values)`` builds it, ``build_all`` and
+   ``shapefmu build`` include it, and ``tests/test_fmi_build.py`` validates it with fmpy.
+"""
+
+import math
+from pathlib import Path
+
+from . import state_codec
+
+# Unit definitions the builder writes to modelDescription.xml: name -> SI base-unit exponents and
+# factor (FMI 2.0 section 2.2.2).
+UNITS = {
+    "1": {},
+    "s": {"s": 1},
+    "Hz": {"s": -1},
+    "rad/s": {"rad": 1, "s": -1},
+    "m": {"m": 1},
+    "m/s": {"m": 1, "s": -1},
+    "m/s2": {"m": 1, "s": -2},
+    "1/s": {"s": -1},
+    "1/m": {"m": -1},
+    "s/m": {"m": -1, "s": 1},
+    "1/(m.s)": {"m": -1, "s": -1},
+}
+
+OK, WARNING, DISCARD, ERROR, FATAL = range(5)
+
+# pythonfmu 0.7.0's export library re-runs the FMU's entry module at every fmi2Instantiate (to find
+# the slave class) and then releases the module's globals dict once more than it took (a
+# Py_DECREF of PyModule_GetDict's borrowed reference): the second instance of an FMU in a process
+# found a freed dict. Every run of the entry module appends its globals here, one reference per
+# release (see builder.ENTRY_MODULE).
+ENTRY_MODULE_REFERENCES = []
+
+_TYPES = {"Real": float, "Integer": int, "Boolean": bool, "String": str}
+
+
+class LogMessage:
+    """One entry of the log queue that pythonfmu's export library drains after every call."""
+
+    __slots__ = ("status", "category", "msg", "debug")
+
+    def __init__(self, status, category, msg):
+        self.status = status
+        self.category = category
+        # Hosts may pass the message to printf as a format string: never hand them a '%'.
+        self.msg = msg.replace("%", " percent")
+        self.debug = False
+
+
+class Variable:
+    """One scalar variable of modelDescription.xml."""
+
+    __slots__ = ("name", "vr", "type", "causality", "variability", "start", "unit", "description", "minimum", "maximum")
+
+    def __init__(self, name, vr, type_, causality, variability, start, unit, description, minimum=None, maximum=None):
+        self.name, self.vr, self.type = name, vr, type_
+        self.causality, self.variability = causality, variability
+        self.start, self.unit, self.description = start, unit, description
+        self.minimum, self.maximum = minimum, maximum
+
+
+class Fmi2Slave:
+    """Base of the shapefmu slaves (the class name is what pythonfmu's export library looks for)."""
+
+    model_name = None
+    description = ""
+    default_experiment = (0.0, 1.0, 1e-3)  # start, stop, step (s)
+    kernels = ()
+    state_attributes = ()
+    # Written by the builder into resources/: start values baked into this FMU and its identity.
+    build_file = "shapefmu_build.json"
+
+    def __init__(self, instance_name="instance", resources=None, logger=None, visible=False, **_ignored):
+        self.instance_name = instance_name
+        self.log_queue = []
+        self.variables = []
+        self.by_name = {}
+        self._by_type = {t: {} for t in _TYPES}
+        self.values = {}
+        self.phase = "instantiated"
+        self.time = 0.0
+        self._kernel_classes = {cls.__name__: cls for cls in self.kernels}
+        self.declare()
+        self._input_names = [v.name for v in self.variables if v.causality == "input"]
+        self.guid = ""
+        self.declared_dependencies = None
+        if resources:
+            self._load_build(Path(resources) / self.build_file)
+
+    # -- declarations (used by subclasses in declare) --------------------------------------------
+
+    def declare(self):
+        raise NotImplementedError
+
+    def _add(self, name, type_, causality, variability, start, unit, description, minimum=None, maximum=None):
+        if name in self.by_name:
+            raise ValueError(f"variable {name!r} is declared twice")
+        if not description:
+            raise ValueError(f"variable {name!r} needs a description")
+        if type_ in ("Real",) and unit not in UNITS:
+            raise ValueError(f"variable {name!r}: unit {unit!r} is not in slave_base.UNITS")
+        var = Variable(name, len(self.variables), type_, causality, variability, start, unit, description, minimum, maximum)
+        self.variables.append(var)
+        self.by_name[name] = var
+        self._by_type[type_][var.vr] = var
+        self.values[name] = start
+        return var
+
+    def parameter(self, name, start, description, unit="1", minimum=None, maximum=None):
+        """A fixed parameter (set before the exit of initialisation); its type follows ``start``."""
+        type_ = {bool: "Boolean", int: "Integer", float: "Real", str: "String"}[type(start)]
+        return self._add(name, type_, "parameter", "fixed", start, unit, description, minimum, maximum)
+
+    def input(self, name, start, description, unit="1"):
+        return self._add(name, "Real", "input", "continuous", float(start), unit, description)
+
+    def output(self, name, description, unit="1", start=0.0):
+        return self._add(name, "Real", "output", "continuous", float(start), unit, description)
+
+    # -- hooks for subclasses --------------------------------------------------------------------
+
+    def initialize(self):
+        """Validate parameters and design the kernels (exit of initialisation)."""
+
+    def step(self, t, h):
+        raise NotImplementedError
+
+    def output_dependencies(self):
+        """``{output name: [input names it depends on at the same instant]}``, after initialize."""
+        return {v.name: [] for v in self.variables if v.causality == "output"}
+
+    # -- logging ---------------------------------------------------------------------------------
+
+    def log(self, message, status=OK):
+        category = {WARNING: "logStatusWarning", ERROR: "logStatusError", FATAL: "logStatusFatal"}.get(status, "logAll")
+        self.log_queue.append(LogMessage(status, category, message))
+
+    def error(self, message):
+        """Log ``message`` with fmi2Error: the front end makes the current call return fmi2Error."""
+        self.log(message, ERROR)
+
+    def _get_log_queue(self):
+        return self.log_queue
+
+    # -- build metadata --------------------------------------------------------------------------
+
+    def _load_build(self, path):
+        import json
+
+        try:
+            build = json.loads(path.read_text(encoding="utf-8"))
+        except FileNotFoundError:
+            return
+        self.guid = build.get("guid", "")
+        self.declared_dependencies = build.get("dependencies")
+        for name, value in build.get("start_values", {}).items():
+            var = self.by_name[name]
+            var.start = _TYPES[var.type](value)
+            self.values[name] = var.start
+
+    # -- FMI calls -------------------------------------------------------------------------------
+
+    def setup_experiment(self, start_time=0.0, *_ignored):
+        if self.phase != "instantiated":
+            self.error(f"fmi2SetupExperiment is allowed only after fmi2Instantiate, not in phase {self.phase}")
+            return
+        if not math.isfinite(start_time):
+            self.error(f"startTime must be finite, got {start_time!r}")
+            return
+        self.time = float(start_time)
+
+    def enter_initialization_mode(self):
+        if self.phase != "instantiated":
+            self.error(f"fmi2EnterInitializationMode is allowed only after fmi2Instantiate, not in phase {self.phase}")
+            return
+        self.phase = "initialization"
+
+    def exit_initialization_mode(self):
+        if self.phase != "initialization":
+            self.error(f"fmi2ExitInitializationMode is allowed only in initialization mode, not in phase {self.phase}")
+            return
+        try:
+            self.initialize()
+            self._check_declared_dependencies()
+        except Exception as error:  # noqa: BLE001 - every failure is the host's fmi2Error
+            self.phase = "failed"
+            self.error(f"{self.model_name} {self.instance_name}: invalid parameters: {_describe(error)}")
+            return
+        self.phase = "step"
+
+    def _check_declared_dependencies(self):
+        if self.declared_dependencies is None:
+            return
+        for output, inputs in self.output_dependencies().items():
+            missing = set(inputs) - set(self.declared_dependencies.get(output, []))
+            if missing:
+                raise ValueError(
+                    f"with these parameters {output} feeds through from {sorted(missing)}, but this FMU was built "
+                    f"declaring it independent of them; rebuild it with these parameters as start values"
+                )
+
+    def do_step(self, current_time, step_size, *_ignored):
+        if self.phase != "step":
+            self.error(f"fmi2DoStep is allowed only after fmi2ExitInitializationMode succeeded, not in phase {self.phase}")
+            return False
+        if not (math.isfinite(current_time) and math.isfinite(step_size) and step_size > 0.0):
+            self.error(f"fmi2DoStep needs a finite time and a step size > 0, got t = {current_time!r}, h = {step_size!r}")
+            return False
+        if abs(current_time - self.time) > 1e-9 * max(1.0, abs(self.time)):
+            self.error(f"fmi2DoStep at t = {current_time!r}, but the FMU is at t = {self.time!r}")
+            return False
+        values = self.values
+        for name in self._input_names:
+            if not math.isfinite(values[name]):
+                self.error(f"input {name} is {values[name]!r} at t = {current_time!r}; it must be finite")
+                return False
+        try:
+            self.step(current_time, step_size)
+        except Exception as error:  # noqa: BLE001
+            self.error(f"{self.model_name} {self.instance_name}: step at t = {current_time!r} failed: {_describe(error)}")
+            return False
+        self.time = current_time + step_size
+        return True
+
+    def terminate(self):
+        if self.phase not in ("step", "failed", "initialization"):
+            self.error(f"fmi2Terminate is not allowed in phase {self.phase}")
+            return
+        self.phase = "terminated"
+
+    def _get(self, vrs, type_):
+        table = self._by_type[type_]
+        values = self.values
+        try:
+            return [values[table[vr].name] for vr in vrs]
+        except KeyError:
+            bad = [vr for vr in vrs if vr not in table]
+            self.error(f"fmi2Get{type_}: no {type_} variable with value reference {bad}")
+            return [_TYPES[type_]() for _ in vrs]
+
+    def get_real(self, vrs):
+        return self._get(vrs, "Real")
+
+    def get_integer(self, vrs):
+        return self._get(vrs, "Integer")
+
+    def get_boolean(self, vrs):
+        return self._get(vrs, "Boolean")
+
+    def get_string(self, vrs):
+        return self._get(vrs, "String")
+
+    def _set(self, vrs, values, type_):
+        table = self._by_type[type_]
+        for vr, value in zip(vrs, values):
+            var = table.get(vr)
+            if var is None:
+                self.error(f"fmi2Set{type_}: no {type_} variable with value reference {vr}")
+            elif var.causality == "output":
+                self.error(f"{var.name} is an output and cannot be set")
+            elif var.causality == "parameter" and self.phase not in ("instantiated", "initialization"):
+                self.error(f"parameter {var.name} can be set only before fmi2ExitInitializationMode (phase {self.phase})")
+            elif self.phase == "terminated":
+                self.error(f"{var.name} cannot be set after fmi2Terminate")
+            else:
+                self.values[var.name] = _TYPES[type_](value)
+                if var.causality == "input":
+                    try:
+                        self.input_changed(var.name)
+                    except Exception as error:  # noqa: BLE001 - see "never raises" in the docstring
+                        self.error(f"{self.model_name} {self.instance_name}: input {var.name} = {value!r}: {_describe(error)}")
+
+    def input_changed(self, name):
+        """Called after an input is set: recompute outputs that feed through from it."""
+
+    def set_real(self, vrs, values):
+        self._set(vrs, values, "Real")
+
+    def set_integer(self, vrs, values):
+        self._set(vrs, values, "Integer")
+
+    def set_boolean(self, vrs, values):
+        self._set(vrs, values, "Boolean")
+
+    def set_string(self, vrs, values):
+        self._set(vrs, values, "String")
+
+    # -- FMU state -------------------------------------------------------------------------------
+
+    def _get_fmu_state(self):
+        kernels = {name: getattr(self, name, None) for name in self.state_attributes}
+        try:
+            return state_codec.encode(
+                {
+                    "model": self.model_name,
+                    "guid": self.guid,
+                    "phase": self.phase,
+                    "time": self.time,
+                    "values": self.values,
+                    "kernels": kernels,
+                },
+                self._kernel_classes,
+            )
+        except Exception as error:  # noqa: BLE001 - a kernel the codec cannot store is fmi2Error
+            self.error(f"fmi2GetFMUstate: {_describe(error)}")
+            return state_codec.invalid(str(error))
+
+    def _set_fmu_state(self, tree):
+        try:
+            state = state_codec.decode(tree, self._kernel_classes)
+            if not isinstance(state, dict) or "invalid" in state:
+                raise ValueError(state.get("invalid", "not a state") if isinstance(state, dict) else "not a state")
+            if state.get("model") != self.model_name or state.get("guid") != self.guid:
+                raise ValueError(f"the state belongs to {state.get('model')!r} {state.get('guid')!r}, not to this FMU")
+            values = state["values"]
+            if set(values) != set(self.values):
+                raise ValueError("the state's variables differ from this FMU's")
+            for name, value in values.items():
+                if not isinstance(value, _TYPES[self.by_name[name].type]):
+                    raise ValueError(f"the state's {name} has the wrong type")
+            phase, time, kernels = state["phase"], state["time"], state["kernels"]
+            if phase not in ("instantiated", "initialization", "step", "failed", "terminated"):
+                raise ValueError(f"unknown phase {phase!r}")
+            if not isinstance(time, float) or set(kernels) != set(self.state_attributes):
+                raise ValueError("the state's time or kernels are malformed")
+        except Exception as error:  # noqa: BLE001 - whatever the state holds, it is refused, not raised
+            self.error(f"fmi2SetFMUstate: {_describe(error)}")
+            return
+        self.values = values
+        self.phase = phase
+        self.time = time
+        for name, kernel in kernels.items():
+            setattr(self, name, kernel)
+
+    @staticmethod
+    def _fmu_state_to_bytes(tree):
+        # Called on the class, with no instance to log through: a state that cannot be serialised
+        # becomes the bytes of a state that fmi2SetFMUstate refuses with a logged error.
+        try:
+            return state_codec.to_bytes(tree)
+        except Exception as error:  # noqa: BLE001
+            return state_codec.to_bytes(state_codec.invalid(f"the state could not be serialised: {_describe(error)}"))
+
+    @staticmethod
+    def _fmu_state_from_bytes(raw):
+        # Called on the class, with no instance to log through: a bad byte string becomes a state
+        # that fmi2SetFMUstate refuses with a logged error.
+        try:
+            return state_codec.from_bytes(raw)
+        except Exception as error:  # noqa: BLE001
+            return state_codec.invalid(str(error))
+
+
+def _describe(error):
+    return str(error) if isinstance(error, ValueError) else f"{type(error).__name__}: {error}"

@@ -1,0 +1,85 @@
+"""The EKFTuner FMU: watches a vibration, estimates its mode with the EKF, shapes the command for it.
+
+Wraps ``runtime.ekf_tuner.EKFTunedShaperKernel`` (paper 001, Fig. 20): until the resonance EKF has
+converged the command passes through; then a shaper of ``kind`` is designed for the estimated
+(omega_n, zeta) and switched in once the command rests; a converged estimate that moves by more than
+``retune_fraction`` re-designs it.
+
+Sampled semantics. The kernel runs one sample every ``Ts`` (fs = 1 / Ts); a communication step is a
+whole number of samples (otherwise fmi2Error), during which ``u`` and ``vibration`` are held. After
+``fmi2DoStep(t, h)`` the outputs are the kernel's after the last sample of the step: ``y`` the
+shaped command of that sample, ``omega_est`` and ``zeta_est`` the EKF's estimate of the undamped
+frequency and damping ratio, ``converged`` 1 once the estimate has converged. Outputs change only
+in doStep, so none depends on an input at the same instant (ModelStructure lists none).
+
+State. fmi2GetFMUstate saves the whole kernel: the EKF's state, covariance, convergence window and
+re-acquisition statistic, the shaper's ring buffer and any pending design.
+"""
+
+import math
+
+from ...runtime.checks import check_count, check_positive, whole_samples
+from ...runtime.ekf import ResonanceEKF
+from ...runtime.ekf_tuner import KINDS, EKFTunedShaperKernel
+from ...runtime.shaper_filter import StreamingShaper
+from ..slave_base import Fmi2Slave
+
+class EKFTuner(Fmi2Slave):
+    model_name = "EKFTuner"
+    description = "EKF-tuned input shaper: estimates the vibration's mode and shapes the command for it (paper 001)"
+    kernels = (EKFTunedShaperKernel, ResonanceEKF, StreamingShaper)
+    state_attributes = ("tuner",)
+
+    def declare(self):
+        self.parameter("kind", "zvd", f"shaper designed for the estimated mode: {', '.join(KINDS)}")
+        self.parameter("n", 1, "derivative order of zv_dn (0 = ZV, 1 = ZVD, ...)", minimum=0)
+        self.parameter("Ts", 1e-3, "sampling period of the EKF and the shaper", unit="s")
+        self.parameter("omega0", 2.0 * math.pi * 10.0, "initial guess of the vibration's frequency", unit="rad/s")
+        self.parameter("amplitude", 1.0, "scale of the vibration signal the EKF tuning is relative to")
+        self.parameter("retune_fraction", 0.05, "re-design when the estimate moves by more than this fraction")
+        self.input("u", 0.0, "command to shape")
+        self.input("vibration", 0.0, "measured vibration (ring-down) the EKF watches")
+        self.output("y", "shaped command (the command itself until a shaper is switched in)")
+        self.output("omega_est", "estimated undamped natural frequency", unit="rad/s")
+        self.output("zeta_est", "estimated damping ratio")
+        self.output("converged", "1 once the EKF estimate has converged, else 0")
+        self.tuner = None
+
+    def initialize(self):
+        values = self.values
+        ts = check_positive(values["Ts"], "Ts")
+        kind = values["kind"]
+        if kind not in KINDS:
+            raise ValueError(f"kind must be one of {', '.join(KINDS)}, got {kind!r}")
+        self.tuner = EKFTunedShaperKernel(
+            1.0 / ts,
+            values["omega0"],
+            kind,
+            check_count(values["n"], "n", minimum=0),
+            values["retune_fraction"],
+            amplitude=values["amplitude"],
+        )
+        values["y"] = 0.0
+        self._estimates()
+
+    def _estimates(self):
+        ekf = self.tuner.ekf
+        self.values["omega_est"] = ekf.omega_n
+        self.values["zeta_est"] = ekf.zeta
+        self.values["converged"] = 1.0 if ekf.converged else 0.0
+
+    def output_dependencies(self):
+        return {"y": [], "omega_est": [], "zeta_est": [], "converged": []}
+
+    def experiment(self):
+        """DefaultExperiment: 200 periods of the guessed frequency, one sample per step."""
+        ts = self.values["Ts"]
+        return 0.0, ts * math.ceil(200 * 2.0 * math.pi / self.values["omega0"] / ts), ts
+
+    def step(self, t, h):
+        m = whole_samples(h, self.values["Ts"], "Ts", "EKF")
+        u, vibration = self.values["u"], self.values["vibration"]
+        for _ in range(m):
+            y = self.tuner.step(u, vibration)
+        self.values["y"] = y
+        self._estimates()

@@ -1,0 +1,147 @@
+"""The ProfileGenerator FMU: rest-to-rest position, velocity and acceleration profiles.
+
+Parameter ``profile`` selects the family, designed at the exit of initialisation by runtime code:
+
+- a twin-pulse kind of paper 003 (``TP``, ``TP:BC``, ``M-TP:BC``, ..., ``runtime.twin_pulse``) for
+  the notch ``omega_n``, ``distance`` and ``speed``; mis-aligned kinds take ``delta_omega`` (rad/s)
+  or, when ``attenuation`` > 0, find it for that attenuation; ``null`` is TP:BC's k; the classic
+  TP's pulses are ``Ts`` wide;
+- ``time-frequency`` (paper 004, ``runtime.time_frequency``): first resonance ``omega_n``, sampling
+  period ``Ts``, ``move_time`` (a whole number of samples), ``distance``; the scale n is optimised
+  (eq. 20) unless ``optimise_scale`` is false, then it is ``scale``;
+- ``bang-bang`` (paper 002, eq. 2, 4, 21; ``runtime.shaped_bang_bang``): the rigid-body
+  bang-bang over ``distance`` at ``acceleration_limit`` (bang-coast-bang if ``speed`` > 0 limits it),
+  convolved with the shaper ``shaper`` (``none`` or a kind of ``runtime.shaper_designs``) for
+  ``n_modes`` modes ``omega[i]`` (rad/s), ``zeta[i]``.
+
+Start. The move starts at ``t_start`` (s), or earlier at the first communication point where the
+input ``start`` is >= 0.5 (a rising start latches); a negative ``t_start`` waits for the input.
+
+Outputs at a communication point t are the exact values of the move at t - t0
+(``runtime.motion.PiecewiseAcceleration.state``): position and velocity are continuous, the
+acceleration is right-continuous. Setting ``start`` high starts the move at that instant, where the
+acceleration jumps from 0 to its first level: ModelStructure declares that acceleration depends on
+``start``; position and velocity start at 0 and do not.
+"""
+
+from ...runtime import shaped_bang_bang, shaper_designs, time_frequency, twin_pulse
+from ...runtime.checks import check_finite, check_positive
+from ...runtime.motion import PiecewiseAcceleration
+from ..slave_base import Fmi2Slave
+
+PROFILES = (*twin_pulse.KINDS, "time-frequency", "bang-bang")
+SHAPERS = ("none", *shaper_designs.KINDS)
+MAX_MODES = 4
+
+
+def design_motion(values):
+    """The PiecewiseAcceleration the parameters ``values`` (name -> value) describe."""
+    profile = values["profile"]
+    distance = check_positive(values["distance"], "distance")
+    if profile in twin_pulse.KINDS:
+        attenuation = check_finite(values["attenuation"], "attenuation")
+        options = {"attenuation": attenuation} if attenuation > 0.0 else {"delta_omega": values["delta_omega"]}
+        if not profile.startswith("M-"):
+            options = {}
+        if profile == "TP:BC":
+            options["null"] = values["null"]
+        design = twin_pulse.twin_pulse_profile(
+            profile, values["omega_n"], distance, values["speed"], ts=values["Ts"], **options
+        )
+        return design.motion
+    if profile == "time-frequency":
+        scale = None if values["optimise_scale"] else check_finite(values["scale"], "scale")
+        return time_frequency.time_frequency_profile(
+            values["omega_n"], values["Ts"], values["move_time"], distance, scale
+        ).motion
+    if profile == "bang-bang":
+        speed = check_finite(values["speed"], "speed")
+        if speed < 0.0:
+            raise ValueError(f"speed must be >= 0 (0: no speed limit), got {speed!r}")
+        times, amplitudes = [0.0], [1.0]
+        if values["shaper"] != "none":
+            times, amplitudes = shaper_designs.design_impulses(
+                values["shaper"], shaper_designs.parameter_modes(values, MAX_MODES, "omega", hertz=False), values["n"]
+            )
+        return shaped_bang_bang.shaped_bang_bang(distance, values["acceleration_limit"], times, amplitudes, speed or None)
+    raise ValueError(f"profile must be one of {', '.join(PROFILES)}, got {profile!r}")
+
+
+class ProfileGenerator(Fmi2Slave):
+    model_name = "ProfileGenerator"
+    description = "Rest-to-rest motion profiles: twin-pulse family, time-frequency, shaped bang-bang"
+    kernels = (PiecewiseAcceleration,)
+    state_attributes = ("motion", "started_at")
+
+    def declare(self):
+        self.parameter("profile", "BC:TZ", f"profile family: {', '.join(PROFILES)}")
+        self.parameter("distance", 1.7, "move distance", unit="m")
+        self.parameter("speed", 0.7, "slew speed (twin-pulse); speed limit of the bang-bang, 0 for none", unit="m/s")
+        self.parameter("acceleration_limit", 1.0, "acceleration limit of the bang-bang", unit="m/s2")
+        self.parameter("omega_n", 3.5, "notch frequency (twin-pulse) or first resonance (time-frequency)", unit="rad/s")
+        self.parameter("delta_omega", 0.2, "null mis-alignment of the M- twin-pulse kinds (if attenuation is 0)", unit="rad/s")
+        self.parameter("attenuation", 0.05, "magnitude at omega_n the M- kinds are designed for; 0 uses delta_omega")
+        self.parameter("null", 2, "null index k of the TP:BC twin pulse (eq. 3)", minimum=1)
+        self.parameter("Ts", 1e-3, "sampling period of the profile's kernel (time-frequency: of the profile)", unit="s")
+        self.parameter("move_time", 2.5e-3, "time-frequency move time, a whole number of Ts", unit="s")
+        self.parameter("optimise_scale", True, "time-frequency: choose the scale n by eq. (20)")
+        self.parameter("scale", 11.0, "time-frequency scale n when optimise_scale is false")
+        self.parameter("shaper", "none", f"shaper convolved with the bang-bang: {', '.join(SHAPERS)}")
+        self.parameter("n", 1, "derivative order of the zv_dn shaper", minimum=0)
+        self.parameter("n_modes", 1, f"number of modes of the bang-bang's shaper, 1..{MAX_MODES}", minimum=1, maximum=MAX_MODES)
+        for i in range(1, MAX_MODES + 1):
+            self.parameter(f"omega[{i}]", 10.0 * i, f"natural frequency of shaper mode {i}", unit="rad/s")
+            self.parameter(f"zeta[{i}]", 0.0, f"damping ratio of shaper mode {i}, in [0, 1)")
+        self.parameter("t_start", 0.0, "start time of the move; negative: wait for the start input", unit="s")
+        self.input("start", 0.0, "starts the move at the communication point where it is >= 0.5")
+        self.output("position", "position of the move", unit="m")
+        self.output("velocity", "velocity of the move", unit="m/s")
+        self.output("acceleration", "acceleration of the move (right-continuous)", unit="m/s2")
+        self.motion = None
+        self.started_at = None
+
+    def initialize(self):
+        if self.values["shaper"] not in SHAPERS:
+            raise ValueError(f"shaper must be one of {', '.join(SHAPERS)}, got {self.values['shaper']!r}")
+        check_finite(self.values["t_start"], "t_start")
+        self.motion = design_motion(self.values)
+        self.started_at = None
+        self._maybe_start(self.time)
+        self._update(self.time)
+
+    def _maybe_start(self, t):
+        if self.started_at is not None:
+            return
+        t_start = self.values["t_start"]
+        if self.values["start"] >= 0.5:
+            self.started_at = t
+        elif 0.0 <= t_start <= t:
+            self.started_at = t_start
+
+    def _update(self, t):
+        position, velocity, acceleration = (
+            (0.0, 0.0, 0.0) if self.started_at is None else self.motion.state(t - self.started_at)
+        )
+        self.values["position"], self.values["velocity"], self.values["acceleration"] = position, velocity, acceleration
+
+    def output_dependencies(self):
+        return {"position": [], "velocity": [], "acceleration": ["start"]}
+
+    def experiment(self):
+        """DefaultExperiment: the move and a fifth more, in 1000 steps."""
+        start = max(self.values["t_start"], 0.0)
+        stop = start + 1.2 * max(self.motion.breaks[-1], 1e-9)
+        return 0.0, stop, stop / 1000.0
+
+    def input_changed(self, name):
+        if self.phase == "step" and self.started_at is None and self.values["start"] >= 0.5:
+            self.started_at = self.time
+            self._update(self.time)
+
+    def step(self, t, h):
+        self._maybe_start(t)
+        if self.started_at is None:
+            t_start = self.values["t_start"]
+            if 0.0 <= t_start <= t + h:
+                self.started_at = t_start
+        self._update(t + h)

@@ -1,0 +1,86 @@
+"""The Shaper FMU: any impulse shaper, single or multi-mode, designed at the exit of initialisation.
+
+Parameters: ``kind`` (zv, zvd, zvdd, zv_dn, mzv, um_zv, ei, ei2, ei3, simultaneous), ``n``
+(derivative order of zv_dn), ``vtol`` (tolerable vibration of ei, ei2, ei3), ``n_modes`` and
+``f[i]`` (Hz), ``zeta[i]`` for i = 1..4, ``Ts`` the sampling period of the filter, ``u0`` the
+command before the start time. The design is ``runtime.shaper_designs.design_impulses``: single-mode
+kinds given several modes are convolved (paper 002's convolution method); ``simultaneous`` solves
+paper 002's eq. (20) for all modes at once with ``runtime.multimode``. Input ``u``, output ``y``.
+
+Sampled semantics. The command is sampled every ``Ts`` and held in between; impulses off the grid
+are split onto it (``runtime.shaper_filter.grid_impulses``), so y[k] = sum_d w_d u[k - d], exactly
+the design layer's ``ImpulseShaper.on_grid(Ts).apply``. A communication step must be a whole
+number of samples (otherwise fmi2Error).
+
+Feed-through. Every impulse shaper has its first impulse at t = 0, so y at a communication point
+depends on u at that same point: y = w_0 u + r, r = sum_{d >= 1} w_d u[k - d]. ModelStructure
+declares the dependency, and setting u updates y at once. ``runtime.shaper_filter.FeedthroughFIR``
+keeps the history part r apart, a StreamingShaper on the taps d >= 1 shifted by one sample:
+stepping it with u[k] when the step commits u[k] returns r for the next sample, so nothing is ever
+un-done.
+"""
+
+import math
+
+from ...runtime import shaper_designs
+from ...runtime.checks import check_count, check_finite, check_positive, check_vtol, whole_samples
+from ...runtime.shaper_filter import FeedthroughFIR, StreamingShaper, grid_impulses
+from ..slave_base import Fmi2Slave
+
+MAX_MODES = 4
+KINDS = shaper_designs.KINDS
+
+
+class Shaper(Fmi2Slave):
+    model_name = "Shaper"
+    description = "Impulse shaper (ZV family, MZV, UM-ZV, EI family, simultaneous multi-mode), designed from its parameters"
+    kernels = (FeedthroughFIR, StreamingShaper)
+    state_attributes = ("fir", "design")
+
+    def declare(self):
+        self.parameter("kind", "zvd", f"shaper design: {', '.join(KINDS)}")
+        self.parameter("n", 1, "derivative order of zv_dn (0 = ZV, 1 = ZVD, ...)", minimum=0)
+        self.parameter("vtol", 0.05, "tolerable residual vibration of ei, ei2, ei3, in (0, 0.25]")
+        self.parameter("n_modes", 1, f"number of modes used, 1..{MAX_MODES}", minimum=1, maximum=MAX_MODES)
+        for i in range(1, MAX_MODES + 1):
+            self.parameter(f"f[{i}]", 10.0 * i, f"natural frequency of mode {i}", unit="Hz")
+            self.parameter(f"zeta[{i}]", 0.0, f"damping ratio of mode {i}, in [0, 1)")
+        self.parameter("Ts", 1e-3, "sampling period of the filter; communication steps are multiples of it", unit="s")
+        self.parameter("u0", 0.0, "command before the start time (the filter starts at rest on it)")
+        self.input("u", 0.0, "command to shape")
+        self.output("y", "shaped command: sum of the impulse amplitudes times the delayed command")
+        self.fir = None
+        self.design = None
+
+    def initialize(self):
+        values = self.values
+        vtol = check_vtol(values["vtol"])
+        n = check_count(values["n"], "n", minimum=0)
+        ts = check_positive(values["Ts"], "Ts")
+        u0 = check_finite(values["u0"], "u0")
+        times, amplitudes = shaper_designs.design_impulses(
+            values["kind"], shaper_designs.parameter_modes(values, MAX_MODES), n, vtol
+        )
+        delays, weights = grid_impulses(times, amplitudes, ts)
+        self.design = (tuple(times), tuple(amplitudes))
+        self.fir = FeedthroughFIR(delays, weights, u0)
+        values["y"] = self.fir.output(check_finite(values["u"], "u"))
+
+    def output_dependencies(self):
+        return {"y": ["u"] if self.fir.w0 != 0.0 else []}
+
+    def experiment(self):
+        """DefaultExperiment (start, stop, step): one sample per step, four shaper lengths."""
+        ts = self.values["Ts"]
+        return 0.0, ts * max(10, math.ceil(4.0 * self.design[0][-1] / ts)), ts
+
+    def input_changed(self, name):
+        if self.fir is not None:
+            self.values["y"] = self.fir.output(self.values["u"])
+
+    def step(self, t, h):
+        m = whole_samples(h, self.values["Ts"], "Ts", "filter")
+        fir, u = self.fir, self.values["u"]
+        for _ in range(m):
+            fir.commit(u)
+        self.values["y"] = fir.output(u)

@@ -1,0 +1,98 @@
+"""The STOSController FMU: shaped time-optimal closed-loop control of a rigid body (paper 002).
+
+Wraps ``runtime.stos``: at the exit of initialisation the shaper ``kind`` is designed for the
+``n_modes`` modes ``f[i]`` (Hz), ``zeta[i]`` (``runtime.shaper_designs``; ``simultaneous`` solves
+eq. 20 with ``runtime.multimode``), and ``stos_curves(b, U, times, amplitudes, damping)`` computes
+the switching curves (eqs. 7-16). With ``settle`` true, the linear settle law with gains ``kp``,
+``kd``, ``ki`` takes over inside the region ``x_enter``, ``v_enter`` (left beyond ``x_exit``,
+``v_exit``), its integrator sampled at ``Ts``.
+
+Sampled semantics and feed-through. The law is evaluated once per sample ``Ts``; a communication
+step is a whole number of samples, with the inputs held. The output ``u`` at a communication point
+is the law evaluated at the inputs set there (``target``, ``x_r``, ``x_r_dot``), so it feeds
+through from all three (ModelStructure says so): setting an input recomputes ``u`` from the
+committed state without changing it, and ``fmi2DoStep`` commits the samples. The sequence of ``u``
+read after setting the inputs is exactly the sequence ``STOSKernel.control`` returns when called
+once per sample with those inputs.
+"""
+
+import math
+
+from ...runtime import shaper_designs
+from ...runtime.checks import check_count, check_finite, check_positive, whole_samples
+from ...runtime.stos import STOSKernel, stos_curves
+from ..slave_base import Fmi2Slave
+
+MAX_MODES = 4
+SETTLE_GAINS = ("kp", "kd", "ki", "x_enter", "v_enter", "x_exit", "v_exit")
+
+
+class STOSController(Fmi2Slave):
+    model_name = "STOSController"
+    description = "Shaped time-optimal servomechanism (STOS, paper 002): bang-bang closed loop that spares the modes"
+    kernels = (STOSKernel,)
+    state_attributes = ("kernel",)
+
+    def declare(self):
+        self.parameter("b", 2.7e3, "rigid-body input gain: x_r'' = -damping x_r' + b u", unit="m/s2")
+        self.parameter("U", 11.0, "input limit |u| <= U")
+        self.parameter("damping", 0.0, "rigid-body velocity damping (Kt^2/(R J) with back EMF)", unit="1/s")
+        self.parameter("kind", "simultaneous", f"shaper the law is built from: {', '.join(shaper_designs.KINDS)}")
+        self.parameter("n", 1, "derivative order of zv_dn (0 = ZV, 1 = ZVD, ...)", minimum=0)
+        self.parameter("n_modes", 2, f"number of modes, 1..{MAX_MODES}", minimum=1, maximum=MAX_MODES)
+        for i in range(1, MAX_MODES + 1):
+            self.parameter(f"f[{i}]", 1000.0 * (i + 1), f"natural frequency of mode {i}", unit="Hz")
+            self.parameter(f"zeta[{i}]", 0.01, f"damping ratio of mode {i}, in [0, 1)")
+        self.parameter("Ts", 1e-5, "sampling period of the control law", unit="s")
+        self.parameter("settle", False, "hand over to the linear settle law near the target")
+        self.parameter("kp", 0.0, "settle law position gain", unit="1/m")
+        self.parameter("kd", 0.0, "settle law velocity gain", unit="s/m")
+        self.parameter("ki", 0.0, "settle law integral gain", unit="1/(m.s)")
+        self.parameter("x_enter", 1e-6, "settle region: position error at which the settle law takes over", unit="m")
+        self.parameter("v_enter", 1e-3, "settle region: velocity at which the settle law takes over", unit="m/s")
+        self.parameter("x_exit", 2e-6, "position error beyond which the settle law lets go", unit="m")
+        self.parameter("v_exit", 2e-3, "velocity beyond which the settle law lets go", unit="m/s")
+        self.input("target", 0.0, "target position", unit="m")
+        self.input("x_r", 0.0, "measured rigid-body position", unit="m")
+        self.input("x_r_dot", 0.0, "measured rigid-body velocity", unit="m/s")
+        self.output("u", "control input, |u| <= U")
+        self.kernel = None
+
+    def initialize(self):
+        values = self.values
+        ts = check_positive(values["Ts"], "Ts")
+        times, amplitudes = shaper_designs.design_impulses(
+            values["kind"], shaper_designs.parameter_modes(values, MAX_MODES), check_count(values["n"], "n")
+        )
+        curves = stos_curves(values["b"], values["U"], times, amplitudes, values["damping"])
+        settle = None
+        if values["settle"]:
+            settle = {name: check_finite(values[name], name) for name in SETTLE_GAINS}
+            settle["Ts"] = ts
+        self.kernel = STOSKernel(curves, settle)
+        self._preview()
+
+    def _preview(self):
+        """u for the current inputs from the committed state, which it leaves as it was."""
+        saved = self.kernel.get_state()
+        self.values["u"] = self.kernel.control(self.values["target"], self.values["x_r"], self.values["x_r_dot"])
+        self.kernel.set_state(saved)
+
+    def output_dependencies(self):
+        return {"u": ["target", "x_r", "x_r_dot"]}
+
+    def experiment(self):
+        """DefaultExperiment: 2000 samples."""
+        ts = self.values["Ts"]
+        return 0.0, 2000 * ts, ts
+
+    def input_changed(self, name):
+        if self.kernel is not None and all(math.isfinite(self.values[n]) for n in ("target", "x_r", "x_r_dot")):
+            self._preview()
+
+    def step(self, t, h):
+        m = whole_samples(h, self.values["Ts"], "Ts", "controller")
+        values = self.values
+        for _ in range(m):
+            self.kernel.control(values["target"], values["x_r"], values["x_r_dot"])
+        self._preview()

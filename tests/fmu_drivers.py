@@ -1,0 +1,118 @@
+"""Drive one FMU through fmpy, libcosimpy and ecospy with the same inputs and steps.
+
+Each ``run_*`` sets ``u`` to ``commands[k]`` at the k-th communication point, takes one step of
+``h`` and reads ``y``: the sequence of outputs at the end of each step.
+"""
+
+from pathlib import Path
+
+
+def variable_references(path):
+    from fmpy import read_model_description
+
+    return {v.name: v.valueReference for v in read_model_description(str(path)).modelVariables}
+
+
+def fmpy_slave(path, instance_name="instance"):
+    """An instantiated fmpy FMU2Slave (caller initialises, frees)."""
+    from fmpy import extract, read_model_description
+    from fmpy.fmi2 import FMU2Slave
+
+    md = read_model_description(str(path))
+    slave = FMU2Slave(guid=md.guid, unzipDirectory=extract(str(path)), modelIdentifier=md.coSimulation.modelIdentifier,
+                      instanceName=instance_name)
+    slave.instantiate()
+    return slave
+
+
+def set_start_values(slave, vr, values):
+    """Set parameters of any type in initialisation mode."""
+    for name, value in values.items():
+        if isinstance(value, bool):
+            slave.setBoolean([vr[name]], [value])
+        elif isinstance(value, int):
+            slave.setInteger([vr[name]], [value])
+        elif isinstance(value, str):
+            slave.setString([vr[name]], [value])
+        else:
+            slave.setReal([vr[name]], [value])
+
+
+def configured(path, parameters=None, instance_name="instance"):
+    """An fmpy slave in initialisation mode with ``parameters`` {name: value} set (caller exits it)."""
+    vr = variable_references(path)
+    slave = fmpy_slave(path, instance_name)
+    slave.setupExperiment(startTime=0.0)
+    slave.enterInitializationMode()
+    set_start_values(slave, vr, parameters or {})
+    return slave, vr
+
+
+def initialised(path, parameters=None):
+    """An fmpy slave after fmi2ExitInitializationMode, with ``parameters`` {name: value} set."""
+    slave, vr = configured(path, parameters)
+    slave.exitInitializationMode()
+    return slave, vr
+
+
+def refused_initialisation(path, parameters):
+    """The FMICallException with which an instance "bad" refuses ``parameters`` at the exit of
+    initialisation (the test fails if it accepts them); the instance is freed."""
+    import pytest
+    from fmpy.fmi1 import FMICallException
+
+    slave, _ = configured(path, parameters, "bad")
+    with pytest.raises(FMICallException) as failure:
+        slave.exitInitializationMode()
+    slave.freeInstance()
+    return failure.value
+
+
+def run_fmpy(path, commands, h):
+    slave, vr = initialised(path)
+    outputs = []
+    for k, u in enumerate(commands):
+        slave.setReal([vr["u"]], [u])
+        slave.doStep(k * h, h)
+        outputs.append(slave.getReal([vr["y"]])[0])
+    slave.terminate()
+    slave.freeInstance()
+    return outputs
+
+
+def run_libcosim(path, commands, h):
+    from libcosimpy.CosimExecution import CosimExecution
+    from libcosimpy.CosimManipulator import CosimManipulator
+    from libcosimpy.CosimObserver import CosimObserver
+    from libcosimpy.CosimSlave import CosimLocalSlave
+
+    execution = CosimExecution.from_step_size(step_size=round(h * 1e9))  # libcosim counts nanoseconds
+    index = execution.add_local_slave(CosimLocalSlave(fmu_path=str(Path(path)), instance_name="instance"))
+    vr = {v.name.decode(): v.reference for v in execution.slave_variables(index)}
+    override = CosimManipulator.create_override()
+    execution.add_manipulator(override)
+    observer = CosimObserver.create_last_value()
+    execution.add_observer(observer)
+    outputs = []
+    for u in commands:
+        override.slave_real_values(index, [vr["u"]], [u])
+        execution.step()
+        outputs.append(observer.last_real_values(index, [vr["y"]])[0])
+    return outputs
+
+
+def run_ecos(path, commands, h):
+    from ecospy.EcosSimulation import EcosSimulation
+    from ecospy.EcosSimulationStructure import EcosSimulationStructure
+
+    outputs = []
+    with EcosSimulationStructure() as structure:
+        structure.add_model("instance", str(Path(path)))
+        with EcosSimulation(structure=structure, step_size=h) as simulation:
+            simulation.init()
+            for u in commands:
+                simulation.set_real("instance::u", u)
+                simulation.step(1)
+                outputs.append(simulation.get_real("instance::y"))
+            simulation.terminate()
+    return outputs

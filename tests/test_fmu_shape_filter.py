@@ -1,0 +1,342 @@
+"""The ShapeFilter FMU: modelDescription, output against the design layer, hosts, state, errors."""
+
+import json
+import math
+import subprocess
+import sys
+import xml.etree.ElementTree as ET
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+from fixtures_fmi import (
+    FEEDTHROUGH_FILTER_STARTS,
+    SHAPE_FILTER_F,
+    SHAPE_FILTER_STARTS,
+    SHAPE_FILTER_ZETA,
+    command_signal,
+)
+from fmpy.fmi1 import FMICallException
+from fmpy.validation import validate_fmu
+from fmu_drivers import configured, initialised, run_ecos, run_fmpy, run_libcosim
+from hosts import run_ecos_program
+
+from shapefmu.runtime import time_frequency as runtime_time_frequency
+from shapefmu.shapers import TWIN_PULSE_PROFILES, WINDOW_FILTERS, SampledShaper, time_frequency_profile
+
+H = 1e-3
+TESTS = Path(__file__).parent
+OMEGA = 2 * math.pi * SHAPE_FILTER_F
+
+
+def _xml(path):
+    with zipfile.ZipFile(path) as fmu:
+        return ET.fromstring(fmu.read("modelDescription.xml"))
+
+
+def _feedthrough_outputs(path, parameters, commands):
+    """(y read right after u is set at each communication point, Ts_used); one sample per step."""
+    slave, vr = configured(path, parameters)
+    slave.exitInitializationMode()
+    (ts,) = slave.getReal([vr["Ts_used"]])
+    outputs = []
+    for k, u in enumerate(commands):
+        slave.setReal([vr["u"]], [u])
+        outputs.append(slave.getReal([vr["y"]])[0])
+        slave.doStep(k * ts, ts)
+    slave.freeInstance()
+    return np.array(outputs), ts
+
+
+def _offline(shaper, commands, u0=0.0):
+    """The design layer's shaping of ``commands`` from rest at ``u0``, y[k] = sum_j taps[j] u[k - j]."""
+    return shaper.apply(np.concatenate([[u0], commands]))[1:]
+
+
+def _after_each_step(shaper, commands, u0):
+    """y at the end of each step, u[k] still held: the offline output at k + 1 with u[k + 1] -> u[k]."""
+    commands = np.asarray(commands, dtype=float)
+    extended = np.concatenate([commands, [commands[-1]]])
+    return _offline(shaper, extended, u0)[1:] + shaper.taps[0] * (extended[:-1] - extended[1:])
+
+
+def _steps(slave, vr, commands, start):
+    out = []
+    for k, u in enumerate(commands, start=start):
+        slave.setReal([vr["u"]], [u])
+        slave.doStep(k * H, H)
+        out.append(slave.getReal([vr["y"]])[0])
+    return out
+
+
+def _fixture_design():
+    """The design layer's damped Hanning filter of order 2 that SHAPE_FILTER_STARTS describe."""
+    return WINDOW_FILTERS["hanning"](OMEGA, SHAPE_FILTER_ZETA, H, SHAPE_FILTER_STARTS["order"])
+
+
+# --- modelDescription -------------------------------------------------------------------------
+
+
+def test_model_descriptions_pass_fmpy_validation(shape_filter_fmu, feedthrough_filter_fmu):
+    assert validate_fmu(str(shape_filter_fmu)) == []
+    assert validate_fmu(str(feedthrough_filter_fmu)) == []
+
+
+def test_hanning_does_not_feed_through_and_every_variable_has_unit_and_description(shape_filter_fmu):
+    root = _xml(shape_filter_fmu)
+    cs = root.find("CoSimulation")
+    assert (cs.get("needsExecutionTool"), cs.get("canGetAndSetFMUstate"), cs.get("canSerializeFMUstate")) == ("false", "true", "true")
+    variables = root.find("ModelVariables").findall("ScalarVariable")
+    index = {v.get("name"): str(i + 1) for i, v in enumerate(variables)}
+    assert all(v.get("description") for v in variables)
+    assert all(r.get("unit") for v in variables for r in v.iter("Real"))
+    assert {r.get("unit") for r in root.iter("Real")} <= {u.get("name") for u in root.find("UnitDefinitions")}
+    outputs = {o.get("index"): o for o in root.find("ModelStructure/Outputs")}
+    # The Hanning window's first sample is 0.5 - 0.5 cos 0 = 0: y at t depends on u before t only.
+    assert _fixture_design().taps[0] == 0.0
+    assert outputs[index["y"]].get("dependencies") == "" and outputs[index["Ts_used"]].get("dependencies") == ""
+    initial = {o.get("index"): o.get("dependencies").split() for o in root.find("ModelStructure/InitialUnknowns")}
+    assert index["u"] not in initial[index["y"]] and index["f"] in initial[index["y"]]
+    experiment = root.find("DefaultExperiment")
+    assert float(experiment.get("stepSize")) == SHAPE_FILTER_STARTS["Ts"]
+
+
+def test_rectangle_feeds_through_with_a_fixed_factor(feedthrough_filter_fmu):
+    root = _xml(feedthrough_filter_fmu)
+    variables = root.find("ModelVariables").findall("ScalarVariable")
+    index = {v.get("name"): str(i + 1) for i, v in enumerate(variables)}
+    outputs = {o.get("index"): o for o in root.find("ModelStructure/Outputs")}
+    y = outputs[index["y"]]
+    assert (y.get("dependencies"), y.get("dependenciesKind")) == (index["u"], "fixed")
+    # Setting u changes y at once by the first tap, 1/M damping-compensated (M = 100).
+    slave, vr = initialised(feedthrough_filter_fmu)
+    before = slave.getReal([vr["y"]])[0]
+    slave.setReal([vr["u"]], [1.0])
+    first_tap = WINDOW_FILTERS["rectangle"](OMEGA, SHAPE_FILTER_ZETA, H).taps[0]
+    assert slave.getReal([vr["y"]])[0] - before == pytest.approx(first_tap, abs=1e-15)
+    slave.freeInstance()
+
+
+# --- output against the design layer -----------------------------------------------------------
+
+
+def test_output_equals_the_design_layer_offline_filtering(shape_filter_fmu):
+    commands = np.array(command_signal(700))
+    outputs, ts = _feedthrough_outputs(shape_filter_fmu, {}, commands)
+    assert ts == H
+    expected = _offline(_fixture_design(), commands, SHAPE_FILTER_STARTS["u0"])
+    np.testing.assert_allclose(outputs, expected, rtol=0, atol=1e-12)
+
+
+def test_blackman_starts_at_zero_and_runs_in_an_fmu_built_without_feed_through(shape_filter_fmu):
+    # Its first sample is 0.42 - 0.5 + 0.08 = 0, which floating point leaves at ~1e-19: taken as the
+    # zero it is, the Hanning-built FMU (y independent of u) accepts it.
+    shaper = WINDOW_FILTERS["blackman"](OMEGA, SHAPE_FILTER_ZETA, H)
+    assert abs(shaper.taps[0]) < 1e-15 * np.max(shaper.taps)
+    commands = np.array(command_signal(500))
+    outputs, _ = _feedthrough_outputs(shape_filter_fmu, {"kind": "blackman", "order": 1}, commands)
+    np.testing.assert_allclose(outputs, _offline(shaper, commands, SHAPE_FILTER_STARTS["u0"]), rtol=0, atol=1e-12)
+
+
+WINDOW_CASES = [
+    ({"kind": "rectangle", "order": 3}, {}),
+    ({"kind": "blackman"}, {}),
+    ({"kind": "hamming", "order": 2}, {}),
+    ({"kind": "three-hanning", "c": 0.5, "adjust_Ts": True}, {"c": 0.5, "adjust_ts": True}),
+    ({"kind": "differenced", "base": "rectangle"}, {"base": "rectangle"}),
+    ({"kind": "convolved", "base": "blackman"}, {"base": "blackman"}),
+]
+
+
+@pytest.mark.parametrize("parameters, options", WINDOW_CASES, ids=[p["kind"] for p, _ in WINDOW_CASES])
+def test_window_filters_equal_the_design_layer(feedthrough_filter_fmu, parameters, options):
+    commands = np.array(command_signal(500))
+    outputs, ts = _feedthrough_outputs(feedthrough_filter_fmu, parameters, commands)
+    shaper = WINDOW_FILTERS[parameters["kind"]](OMEGA, SHAPE_FILTER_ZETA, H, parameters.get("order", 1), **options)
+    assert ts == shaper.ts
+    np.testing.assert_allclose(outputs, _offline(shaper, commands), rtol=0, atol=1e-12)
+
+
+TWIN_PULSE_CASES = [
+    ({"kind": "TP"}, {}),
+    ({"kind": "TP:BC", "null": 3}, {"null": 3}),
+    ({"kind": "M-TP:BC", "delta_f": 0.5}, {"delta_omega": 2 * math.pi * 0.5}),
+    ({"kind": "BC:TZ"}, {}),
+    ({"kind": "M-BC:TZ:TP", "delta_f": 0.3}, {"delta_omega": 2 * math.pi * 0.3}),
+]
+
+
+@pytest.mark.parametrize("parameters, options", TWIN_PULSE_CASES, ids=[p["kind"] for p, _ in TWIN_PULSE_CASES])
+def test_twin_pulse_kernels_equal_the_design_layer(feedthrough_filter_fmu, parameters, options):
+    commands = np.array(command_signal(500))
+    outputs, _ = _feedthrough_outputs(feedthrough_filter_fmu, {"zeta": 0.0, **parameters}, commands)
+    # The kernel TP * BC is the same for any move (a move of 1 m at 1 m/s here).
+    design = TWIN_PULSE_PROFILES[parameters["kind"]](OMEGA, 1.0, 1.0, ts=H, **options)
+    kernel = design.profile.kernel
+    assert kernel.gain == pytest.approx(1.0, abs=1e-12)
+    np.testing.assert_allclose(outputs, _offline(kernel, commands), rtol=0, atol=1e-12)
+
+
+def test_time_frequency_filter_is_the_normalised_velocity_of_the_design_layer_move(feedthrough_filter_fmu):
+    move_time = 0.1
+    commands = np.array(command_signal(400))
+    outputs, _ = _feedthrough_outputs(
+        feedthrough_filter_fmu, {"kind": "time-frequency", "zeta": 0.0, "move_time": move_time}, commands
+    )
+    # The runtime's bounded Brent search and scipy's agree on the scale to ~1e-6; the taps are
+    # compared at the runtime's scale, which the FMU uses.
+    n, _ = runtime_time_frequency.optimal_scale(OMEGA, H, move_time)
+    scipy_design = time_frequency_profile(OMEGA, H, move_time, 1.0)
+    assert n == pytest.approx(scipy_design.n, abs=1e-5)
+    velocity = time_frequency_profile(OMEGA, H, move_time, 1.0, n=n).profile.velocity
+    m = round(move_time / H)
+    assert abs(velocity[m + 1]) < 1e-12 * np.max(np.abs(velocity))  # the move ends at rest
+    shaper = SampledShaper(velocity[: m + 1] / np.sum(velocity[: m + 1]), H)
+    np.testing.assert_allclose(outputs, _offline(shaper, commands), rtol=0, atol=1e-12)
+
+
+def test_cli_bakes_a_design_and_refuses_a_bad_one_with_exit_code_2(tmp_path, capsys):
+    from shapefmu.cli import main
+
+    out = tmp_path / "HanningFilter.fmu"
+    assert main(["build", "shape-filter", "--kind", "blackman", "--mode", "10", "--order", "2", "-o", str(out)]) == 0
+    assert validate_fmu(str(out)) == []
+    baked = json.loads(zipfile.ZipFile(out).read("resources/shapefmu_build.json"))["start_values"]
+    assert (baked["kind"], baked["order"], baked["f"]) == ("blackman", 2, pytest.approx(10.0, rel=1e-15))
+    commands = np.array(command_signal(200))
+    outputs, _ = _feedthrough_outputs(out, {}, commands)
+    shaper = WINDOW_FILTERS["blackman"](2 * math.pi * 10.0, 0.0, H, 2)
+    np.testing.assert_allclose(outputs, _offline(shaper, commands), rtol=0, atol=1e-12)
+    with pytest.raises(SystemExit) as refused:
+        main(["build", "shape-filter", "--kind", "hanning", "--mode", "10", "--ts", "1.3e-3", "-o", str(tmp_path / "x.fmu")])
+    assert refused.value.code == 2 and "which is not an integer" in capsys.readouterr().err
+    assert not (tmp_path / "x.fmu").exists()
+
+
+# --- hosts ------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("fixture", ["shape_filter_fmu", "feedthrough_filter_fmu"])
+def test_outputs_identical_in_fmpy_libcosim_and_ecos(fixture, request):
+    path = request.getfixturevalue(fixture)
+    commands = command_signal(400)
+    reference = run_fmpy(path, commands, H)
+    starts = SHAPE_FILTER_STARTS if fixture == "shape_filter_fmu" else FEEDTHROUGH_FILTER_STARTS
+    shaper = WINDOW_FILTERS[starts["kind"]](OMEGA, SHAPE_FILTER_ZETA, H, starts.get("order", 1))
+    np.testing.assert_allclose(reference, _after_each_step(shaper, commands, starts.get("u0", 0.0)), rtol=0, atol=1e-12)
+    for other in (run_libcosim(path, commands, H), run_ecos(path, commands, H)):
+        np.testing.assert_allclose(other, reference, rtol=0, atol=1e-12)
+
+
+def test_runs_in_the_ecos_command_line_host_without_python_or_ld_preload(shape_filter_fmu, tmp_path):
+    y = run_ecos_program(shape_filter_fmu, step=0.001, stop_time=0.5, workdir=tmp_path)["instance::y[REAL]"]
+    # u stays at its start value 0 after resting at u0 = -1: the filter's step response; ecos
+    # writes 6 decimals.
+    expected = _offline(_fixture_design(), np.zeros(y.size), SHAPE_FILTER_STARTS["u0"])
+    np.testing.assert_allclose(y, expected, rtol=0, atol=5e-7)
+
+
+def test_runs_with_only_the_standard_library(shape_filter_fmu, tmp_path):
+    from fmpy import extract
+
+    directory = extract(str(shape_filter_fmu), str(tmp_path / "unzipped"))
+    steps = 300
+    result = subprocess.run(
+        [sys.executable, "-I", "-S", str(TESTS / "fmi2_ctypes_driver.py"), str(directory), str(steps), str(H)],
+        capture_output=True, text=True, timeout=60,
+    )
+    assert result.returncode == 0, result.stderr
+    out = json.loads(result.stdout.splitlines()[0])
+    expected = _after_each_step(_fixture_design(), command_signal(steps), SHAPE_FILTER_STARTS["u0"])
+    np.testing.assert_allclose(out, expected, rtol=0, atol=1e-12)
+
+
+# --- state ------------------------------------------------------------------------------------
+
+
+def test_get_and_set_state_restores_the_filter_exactly(shape_filter_fmu):
+    commands = command_signal(500)
+    slave, vr = initialised(shape_filter_fmu)
+    _steps(slave, vr, commands[:250], 0)
+    state = slave.getFMUState()
+    first = _steps(slave, vr, commands[250:], 250)
+    slave.setFMUState(state)
+    again = _steps(slave, vr, commands[250:], 250)
+    slave.freeFMUState(state)
+    slave.freeInstance()
+    assert again == first  # bit for bit
+    assert first == run_fmpy(shape_filter_fmu, commands, H)[250:]
+
+
+def test_serialised_state_restores_in_a_fresh_instance(shape_filter_fmu):
+    commands = command_signal(500)
+    slave, vr = initialised(shape_filter_fmu)
+    _steps(slave, vr, commands[:300], 0)
+    raw = slave.serializeFMUState(slave.getFMUState())
+    expected = _steps(slave, vr, commands[300:], 300)
+    slave.freeInstance()
+    fresh, vr = initialised(shape_filter_fmu)
+    fresh.setFMUState(fresh.deserializeFMUState(raw))
+    assert _steps(fresh, vr, commands[300:], 300) == expected
+    fresh.freeInstance()
+
+
+# --- errors -----------------------------------------------------------------------------------
+
+BAD_PARAMETERS = [
+    ({"zeta": 1.0}, "zeta must be in [0, 1), got 1.0"),
+    ({"f": -5.0}, "f must be > 0, got -5.0"),
+    ({"kind": "kaiser"}, "kind must be a window filter"),
+    ({"order": 0}, "order must be an integer >= 1, got 0"),
+    # 1.3 ms makes the Hanning window 200 / 1.3 = 153.8 samples long; M = 153 needs Ts = 2 / (f_d M).
+    ({"Ts": 1.3e-3}, "which is not an integer; valid ts make M an integer >= 4, the nearest are 0.001307189542 s"),
+    ({"kind": "TP"}, "zeta must be 0 and order 1"),
+    ({"kind": "time-frequency", "zeta": 0.0, "order": 1, "move_time": 0.1005}, "move_time / ts must be an integer"),
+    ({"kind": "M-TP:BC", "zeta": 0.0, "order": 1, "delta_f": 12.0}, "delta_f must be in [0, f) = [0, 10.0125) Hz, got 12.0"),
+    # Built declaring y independent of u, the FMU cannot become a rectangle, whose y feeds through.
+    ({"kind": "rectangle", "order": 1}, "y feeds through from ['u']"),
+]
+
+
+@pytest.mark.parametrize("parameters, words", BAD_PARAMETERS, ids=[w for _, w in BAD_PARAMETERS])
+def test_bad_parameters_fail_initialisation_with_error_and_a_logged_message(shape_filter_fmu, capfd, parameters, words):
+    slave, vr = configured(shape_filter_fmu, parameters, "bad")
+    with pytest.raises(FMICallException) as failure:
+        slave.exitInitializationMode()
+    assert failure.value.status == 3  # fmi2Error
+    with pytest.raises(FMICallException):
+        slave.doStep(0.0, H)  # the instance stays refused, and alive
+    slave.freeInstance()
+    logged = capfd.readouterr().out
+    assert "ShapeFilter bad: invalid parameters" in logged and words in logged
+
+
+def test_a_step_that_is_not_a_whole_number_of_samples_is_an_error(shape_filter_fmu):
+    commands = command_signal(60)
+    slave, vr = initialised(shape_filter_fmu)
+    with pytest.raises(FMICallException) as failure:
+        slave.doStep(0.0, 1.5 * H)
+    assert failure.value.status == 3
+    out = []
+    for k in range(0, len(commands), 3):  # three samples per step, u held over each
+        slave.setReal([vr["u"]], [commands[k]])
+        slave.doStep(k * H, 3 * H)
+        out.append(slave.getReal([vr["y"]])[0])
+    slave.freeInstance()
+    held = np.repeat(commands[::3], 3)
+    np.testing.assert_allclose(out, _after_each_step(_fixture_design(), held, SHAPE_FILTER_STARTS["u0"])[2::3],
+                               rtol=0, atol=1e-12)
+
+
+def test_nan_input_fails_that_step_and_leaves_the_state_untouched(shape_filter_fmu):
+    commands = command_signal(300)
+    slave, vr = initialised(shape_filter_fmu)
+    out = _steps(slave, vr, commands[:100], 0)
+    slave.setReal([vr["u"]], [float("nan")])
+    with pytest.raises(FMICallException) as failure:
+        slave.doStep(100 * H, H)
+    assert failure.value.status == 3
+    out += _steps(slave, vr, commands[100:], 100)
+    slave.freeInstance()
+    assert out == run_fmpy(shape_filter_fmu, commands, H)
