@@ -1,0 +1,40 @@
+"""Plant-FMU generator: native FMI 2.0 Model Exchange + Co-Simulation FMUs from plant models.
+
+    build_plant_fmu(model, out_path, *, name=None) -> Path
+    build_all(models_dir, out_dir) -> list[Path]
+    model_from_file(path) -> the model of a *.toml or *.py model file (for the CLI)
+
+``model`` is a model file (``models/*.toml``), a ``shapefmu.plants.Plant``, a python-control
+``StateSpace``/``TransferFunction``, or a ``NonlinearPlant`` (a CasADi symbolic ODE, see
+``models/pendulum.py``). One FMU is both Model Exchange (derivatives, outputs, directional
+derivatives from the Jacobian) and Co-Simulation (exact zero-order-hold step for linear plants,
+the matrix exponential computed in C when the step size or a parameter changes; fixed-substep RK4
+for nonlinear plants; variable communication steps). It carries its C sources and
+``sources/buildDescription.xml``, so fmpy (``fmpy.build.build_platform_binary``) or any tool can
+recompile it, and ``binaries/<platform>/`` compiled here with ``gcc -O2 -shared -fPIC``.
+
+Structure (as the FMI Reference FMUs): ``c/plant_fmi2.c`` is the one hand-written, tested FMI 2.0
+wrapper shared by all plants; the generator writes only the model part (``model.c``: sizes, names,
+start values, parameter constraints; ``plant_casadi.c``: f, g and their Jacobians from CasADi).
+
+Variable names (``variableNamingConvention="structured"``), stable for SSP parameter bindings:
+
+- inputs, outputs: the names of the model file / plant (``voltage``, ``position``, ``theta_1``);
+- parameters: the model file's parameter names in the units written there (``b2``, ``Kt``); a
+  vector parameter becomes one scalar per entry, 1-based: ``f[1]``, ``f[2]``, ``lengths[10]``;
+  a plant of unknown kind (a python-control LTI) has the matrix entries ``A[i,j]``, ``B[i,j]``,
+  ``C[i,j]``, ``D[i,j]``; a nonlinear plant also has ``substep`` (s, the longest RK4 substep);
+- states: ``state.<name>`` with the plant's state names (``state.x_r``, ``state.v_f1``; a
+  transfer function's realisation has ``state.x_1`` ...), derivatives ``der(state.<name>)``.
+
+Parameters are ``tunable`` (settable between Co-Simulation steps and in Model Exchange event mode;
+the zero-order-hold matrices are recomputed), except a transfer function's ``num`` and ``den``,
+which are ``fixed`` because the states of its realisation depend on them. A value out of a
+parameter's range (e.g. ``f[1] <= 0``, ``zeta`` outside [0, 1)) is refused with fmi2Error and a
+logged message, as is any non-finite input, a negative step, or a call out of order.
+"""
+
+from shapefmu.fmi.plantgen.build import build_all, build_plant_fmu, fmu_file_name, model_from_file
+from shapefmu.fmi.plantgen.nonlinear import NonlinearPlant, Output, Variable
+
+__all__ = ["NonlinearPlant", "Output", "Variable", "build_all", "build_plant_fmu", "fmu_file_name", "model_from_file"]

@@ -1,0 +1,139 @@
+"""Assemble and compile a plant FMU: sources, buildDescription.xml, modelDescription.xml, binary."""
+
+from __future__ import annotations
+
+import dataclasses
+import importlib.util
+import os
+import shutil
+import subprocess
+import tempfile
+import tomllib
+import zipfile
+from importlib import resources
+from pathlib import Path
+
+import fmpy
+
+from shapefmu.fmi.plantgen import description, linear
+from shapefmu.fmi.plantgen.codegen import write_sources
+from shapefmu.fmi.plantgen.model_part import ModelPart, check_name
+from shapefmu.fmi.plantgen.nonlinear import NonlinearPlant
+from shapefmu.plants import as_plant
+
+# The hand-written C shipped with every plant FMU (package data in plantgen/c/).
+WRAPPER_SOURCES = ("plant_fmi2.c", "plant_expm.c")
+WRAPPER_HEADERS = ("plant_model.h", "plant_expm.h", "fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")
+COMPILE_FLAGS = ("-O2", "-shared", "-fPIC", "-std=c99", "-fvisibility=hidden")
+
+
+def _from_model_file(path: Path, name: str | None) -> ModelPart:
+    plant = as_plant(path)
+    with open(path, "rb") as handle:
+        data = tomllib.load(handle)
+    units = {signal: fields.get("unit", "") for key in ("inputs", "outputs") for signal, fields in data[key].items()}
+    descriptions = {key: raw.get("description", "") for key, raw in data["parameters"].items()}
+    return linear.model_part(plant, name=name, signal_units=units, descriptions=descriptions,
+                             description=data.get("description", ""))
+
+
+def to_model_part(model, name: str | None = None) -> ModelPart:
+    """The model part of a model file path, a ``Plant``, a python-control LTI or a ``NonlinearPlant``."""
+    if name is not None:
+        check_name(name, "name")
+    if isinstance(model, NonlinearPlant):
+        part = model.model_part()
+        if name is not None:
+            part = dataclasses.replace(part, name=name)
+        return part
+    if isinstance(model, (str, os.PathLike)):
+        return _from_model_file(Path(model), name)
+    plant = as_plant(model)
+    return linear.model_part(plant, name=name)
+
+
+def _compile(sources: Path, binary: Path, c_files: list[str]) -> None:
+    compiler = os.environ.get("CC", "gcc")
+    command = [compiler, *COMPILE_FLAGS, "-I", str(sources), *[str(sources / f) for f in c_files], "-o", str(binary), "-lm"]
+    try:
+        completed = subprocess.run(command, capture_output=True, text=True)
+    except FileNotFoundError:
+        raise ValueError(f"C compiler {compiler!r} not found: set CC or install gcc") from None
+    if completed.returncode != 0:
+        raise ValueError(f"compiling the plant FMU failed ({' '.join(command)}):\n{completed.stderr}")
+
+
+def build_plant_fmu(model, out_path, *, name: str | None = None) -> Path:
+    """Generate, compile and zip a plant FMU (FMI 2.0 Model Exchange + Co-Simulation); returns its path.
+
+    ``model`` is a model file (``models/*.toml``), a ``Plant``, a python-control LTI or a
+    ``NonlinearPlant``; ``name`` replaces the model's name (and the FMU's model identifier).
+    """
+    part = to_model_part(model, name)
+    out_path = Path(out_path)
+    identifier = description.model_identifier(part)
+    with tempfile.TemporaryDirectory(prefix="plantgen_") as tmp:
+        root = Path(tmp)
+        sources = root / "sources"
+        sources.mkdir()
+        package = resources.files("shapefmu.fmi.plantgen") / "c"
+        for file in WRAPPER_SOURCES + WRAPPER_HEADERS:
+            (sources / file).write_bytes((package / file).read_bytes())
+        # The GUID hashes the sources, which include the GUID: generate with a placeholder first.
+        generated = write_sources(part, "", sources)
+        c_files = [*WRAPPER_SOURCES, *generated]
+        guid = description.guid_of(part, {f: (sources / f).read_text(encoding="utf-8") for f in c_files})
+        write_sources(part, guid, sources)
+        (sources / "buildDescription.xml").write_text(description.build_description(part, tuple(c_files)), encoding="utf-8")
+        binaries = root / "binaries" / fmpy.platform
+        binaries.mkdir(parents=True)
+        _compile(sources, binaries / f"{identifier}{fmpy.sharedLibraryExtension}", c_files)
+        (root / "modelDescription.xml").write_text(description.model_description(part, guid, tuple(c_files)),
+                                                   encoding="utf-8")
+        out_path.parent.mkdir(parents=True, exist_ok=True)
+        partial = out_path.with_name(out_path.name + ".partial")
+        with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as archive:
+            for path in sorted(root.rglob("*")):
+                if path.is_file():
+                    archive.write(path, path.relative_to(root).as_posix())
+        shutil.move(partial, out_path)
+    return out_path
+
+
+def fmu_file_name(model_name: str) -> str:
+    """``disk_drive`` -> ``DiskDrive.fmu`` (the file names of fmus/)."""
+    return "".join(word[:1].upper() + word[1:] for word in model_name.split("_")) + ".fmu"
+
+
+def model_from_file(path):
+    """The model a file holds: a model file (*.toml) as its path, or ``plant()`` of a Python model
+    file (*.py, e.g. models/pendulum.py); None for a Python file that defines no ``plant()``."""
+    path = Path(path)
+    if not path.is_file():
+        raise ValueError(f"model file {str(path)!r} does not exist")
+    if path.suffix == ".toml":
+        return path
+    if path.suffix != ".py":
+        raise ValueError(f"a plant model file must be .toml or .py (defining plant()), got {str(path)!r}")
+    spec = importlib.util.spec_from_file_location(f"shapefmu_models_{path.stem}", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    factory = getattr(module, "plant", None)
+    return factory() if callable(factory) else None
+
+
+def build_all(models_dir, out_dir) -> list[Path]:
+    """Build one FMU per plant model in ``models_dir`` (every *.toml, and every *.py defining
+    ``plant()``) into ``out_dir``, named by ``fmu_file_name``; returns the paths."""
+    models_dir, out_dir = Path(models_dir), Path(out_dir)
+    if not models_dir.is_dir():
+        raise ValueError(f"models_dir must be a directory, got {str(models_dir)!r}")
+    built = []
+    for path in sorted(models_dir.glob("*.toml")):
+        part = to_model_part(path)
+        built.append(build_plant_fmu(path, out_dir / fmu_file_name(part.name)))
+    for path in sorted(models_dir.glob("*.py")):
+        model = model_from_file(path)
+        if model is not None:
+            built.append(build_plant_fmu(model, out_dir / fmu_file_name(to_model_part(model).name)))
+    return built

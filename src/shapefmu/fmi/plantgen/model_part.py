@@ -1,0 +1,131 @@
+"""The model part of a plant FMU, before it becomes C: named symbols and CasADi expressions.
+
+A ``ModelPart`` holds x' = f(x, u, p), y = g(x, u, p) as CasADi SX expressions of the state x, the
+input u and the scalar parameters p, with the names, units, start values and constraints the FMU
+declares. Linear plants (``shapefmu.fmi.plantgen.linear``) and nonlinear ones
+(``shapefmu.fmi.plantgen.nonlinear``) both end here, so that one code generator and one C wrapper
+serve both.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+
+import casadi as ca
+
+# What the C wrapper checks when a parameter is set (plant_model.h, PlantConstraint).
+CONSTRAINTS = ("any", "positive", "nonnegative", "nonzero", "damping_ratio")
+
+# A structured FMI 2.0 name without quoted parts (fmi2 standard, section 2.2.9): identifiers
+# separated by dots, each with optional array indices.
+_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*(\[[0-9]+(,[0-9]+)*\])?(\.[A-Za-z_][A-Za-z0-9_]*(\[[0-9]+(,[0-9]+)*\])?)*")
+
+
+def check_name(name: str, what: str) -> str:
+    """``name`` if it is a structured FMI 2.0 variable name (letters, digits, _, dots, [i,j])."""
+    if not isinstance(name, str) or not _NAME.fullmatch(name):
+        raise ValueError(f"{what} must be a structured FMI name such as x_1, f[2] or mass.v, got {name!r}")
+    return name
+
+
+@dataclass(frozen=True)
+class ScalarParameter:
+    """One scalar parameter of the FMU: ``symbol`` is the CasADi symbol f and g are written in."""
+
+    name: str
+    symbol: ca.SX
+    value: float
+    unit: str = ""
+    tunable: bool = True
+    constraint: str = "any"
+    description: str = ""
+
+    def __post_init__(self):
+        check_name(self.name, "parameter name")
+        if self.constraint not in CONSTRAINTS:
+            raise ValueError(f"constraint of {self.name} must be one of {CONSTRAINTS}, got {self.constraint!r}")
+
+
+@dataclass(frozen=True)
+class Signal:
+    """A state, input or output: its name, unit, start value (states, inputs) and nominal (states)."""
+
+    name: str
+    unit: str = ""
+    start: float = 0.0
+    nominal: float = 1.0
+    description: str = ""
+
+
+@dataclass(frozen=True)
+class ModelPart:
+    """Everything the generator needs for one plant FMU.
+
+    ``x`` and ``u`` are SX column vectors, ``f`` (like x) and ``g`` (ny x 1) SX expressions of
+    ``x``, ``u`` and the parameters' symbols. ``linear`` selects the exact zero-order-hold
+    Co-Simulation step; otherwise the step is a fixed-substep RK4 whose substep is the parameter
+    named by ``substep_parameter``.
+    """
+
+    name: str
+    description: str
+    states: tuple[Signal, ...]
+    inputs: tuple[Signal, ...]
+    outputs: tuple[Signal, ...]
+    parameters: tuple[ScalarParameter, ...]
+    x: ca.SX
+    u: ca.SX
+    f: ca.SX
+    g: ca.SX
+    linear: bool
+    substep_parameter: str | None = None
+
+    def __post_init__(self):
+        for what, signals in (("state", self.states), ("input", self.inputs), ("output", self.outputs)):
+            for signal in signals:
+                check_name(signal.name, f"{what} name")
+        names = [f"state.{s.name}" for s in self.states] + [s.name for s in self.inputs + self.outputs]
+        names += [p.name for p in self.parameters]
+        duplicates = sorted({n for n in names if names.count(n) > 1})
+        if duplicates:
+            raise ValueError(f"plant {self.name!r}: variable names must be unique, repeated: {duplicates}")
+        if not self.inputs:
+            raise ValueError(f"plant {self.name!r} must have at least one input")
+        shapes = {"x": (self.x.shape, (len(self.states), 1)), "u": (self.u.shape, (len(self.inputs), 1)),
+                  "f": (self.f.shape, (len(self.states), 1)), "g": (self.g.shape, (len(self.outputs), 1))}
+        for key, (shape, expected) in shapes.items():
+            if tuple(shape) != expected:
+                raise ValueError(f"plant {self.name!r}: {key} must have shape {expected}, got {tuple(shape)}")
+        if not self.linear and self.substep_parameter not in [p.name for p in self.parameters]:
+            raise ValueError(f"plant {self.name!r}: a nonlinear plant needs its RK4 substep among the parameters, "
+                             f"got substep_parameter={self.substep_parameter!r}")
+
+    @property
+    def p(self) -> ca.SX:
+        return ca.vertcat(*[parameter.symbol for parameter in self.parameters])
+
+    def functions(self) -> tuple[ca.Function, ca.Function]:
+        """The CasADi functions the C model part is generated from: (f, g) and their Jacobians,
+        A = df/dx, B = df/du, C = dg/dx, D = dg/du (dense, column-major when generated)."""
+        arguments = [self.x, self.u, self.p]
+        derivatives_outputs = ca.Function("plant_casadi_derivatives_outputs", arguments, [self.f, self.g],
+                                          ["x", "u", "p"], ["dx", "y"])
+        jacobians = ca.Function(
+            "plant_casadi_jacobians", arguments,
+            [ca.densify(ca.jacobian(e, v)) for e, v in ((self.f, self.x), (self.f, self.u), (self.g, self.x), (self.g, self.u))],
+            ["x", "u", "p"], ["A", "B", "C", "D"])
+        return derivatives_outputs, jacobians
+
+    def dependencies(self) -> tuple[list[list[int]], list[list[int]]]:
+        """Structural dependencies of each derivative and each output on the states and inputs,
+        as 0-based positions in (x, u): the ModelStructure of the modelDescription."""
+        known = ca.vertcat(self.x, self.u)
+        result = []
+        for expression in (self.f, self.g):
+            sparsity = ca.jacobian(expression, known).sparsity()
+            rows = [[] for _ in range(expression.shape[0])]
+            for row, column in zip(*sparsity.get_triplet()):
+                rows[row].append(column)
+            result.append([sorted(r) for r in rows])
+        return result[0], result[1]
