@@ -1,0 +1,569 @@
+"""The master algorithm: fixed macro steps over an SSP system of FMI 2.0 FMUs.
+
+Communication semantics (``t_k = t0 + k*h``; the last step is shortened to end exactly at stop):
+
+* Initialisation: every FMU gets ``fmi2SetupExperiment``, then its SSP parameter bindings and the
+  run's parameters, then ``fmi2EnterInitializationMode``. Inputs are propagated in initialisation
+  mode (Jacobi: as many sweeps of "read every output, set every input" as there are components,
+  as libcosim does; Gauss-Seidel: once in stepping order, iterating loop groups), then
+  ``fmi2ExitInitializationMode``, and the outputs are read: that is the record at ``t0``.
+* ``algorithm="jacobi"`` -- the scheme of libcosim's fixed-step algorithm and of ecos: every
+  component's inputs for the step ``[t_k, t_k+h]`` are the transformed outputs read at ``t_k``;
+  all components then set inputs, ``fmi2DoStep`` and read outputs. A recorded output that
+  feeds through (``y = k*u`` computed when read) is read right after the step, before the new
+  inputs are set, as libcosim reads it; ecos transfers connection by connection after the step and
+  so reports such an output with the new input. Outputs computed in ``fmi2DoStep`` are identical in
+  all three.
+* ``algorithm="gauss-seidel"`` (default): components step one after another in the order of
+  :func:`shapefmu.cosim.graph.schedule`; each takes its inputs from the latest outputs, so a
+  consumer stepping after its producer sees the producer's value at ``t_k+h``. An output that
+  feeds through (ModelStructure lists an input among its dependencies) is passed on as read at
+  the communication point, right after its FMU's inputs are set and before ``fmi2DoStep``: it is
+  a function of those inputs at that instant (FMI 2.0, sec. 4.2.1), and a sampled FMU (a shaper
+  filter, a controller) holds it over the coming step. Read after the step it would pair the new
+  sample's history with the old input: a shaper's delayed impulses would arrive one sample early,
+  a controller's internal state (an integrator) one sample ahead. Recorded values are read after
+  the step (for such an FMU only on recording steps, when nothing else needs that read).
+  Algebraic loops are iterated on the torn inputs with FMU state rollback
+  (``fmi2GetFMUstate``/``fmi2SetFMUstate``):
+  by Newton's method with a finite-difference Jacobian (default) or plain fixed-point iteration,
+  until the torn inputs agree with the outputs that feed them to ``loop_tolerance``.
+* ``step_multiples={"plant": 10}``: that component steps every 10th macro step by ``10*h`` (the
+  last one cut at the stop time), and its outputs are passed on when it has reached the others'
+  time, as libcosim's decimation factor does.
+* Model Exchange components are integrated by the master (see :mod:`shapefmu.cosim.units`).
+
+Speed: the per-step work is generated as one Python function for the system (no per-step
+dispatch on component kinds), calling the FMUs' C functions on preallocated ctypes arrays and
+argument objects (no per-call argument conversion, see :mod:`.units`).
+"""
+
+from __future__ import annotations
+
+import math
+import shutil
+import sys
+import time as wallclock
+import weakref
+from ctypes import c_double
+from pathlib import Path
+
+import numpy as np
+
+from shapefmu.cosim.errors import AlgebraicLoopError, CosimError, CosimInterrupted
+from shapefmu.cosim.graph import Stage, _feeds_through, output_dependencies, schedule
+from shapefmu.cosim.units import FMUFailure, ModelExchangeUnit, load_units
+from shapefmu.fmi.ssp import System, read_ssp
+
+ALGORITHMS = ("gauss-seidel", "jacobi")
+LOOP_SOLVERS = ("newton", "fixed-point")
+
+
+def _split(reference: str, what: str) -> tuple[str, str]:
+    component, dot, variable = reference.partition(".")
+    if not dot:
+        raise ValueError(f"{what} must be 'component.variable', got {reference!r}")
+    return component, variable
+
+
+class Master:
+    """Run an SSP system (a :class:`~shapefmu.fmi.ssp.System` or a .ssp/.ssd path) by fixed steps.
+
+    Parameters
+    ----------
+    system_or_path : System | str | Path
+    step : float
+        Macro (communication) step in s.
+    algorithm : "gauss-seidel" | "jacobi"
+    record : list of "component.variable", default every Real output of every component.
+    output_interval : float, default ``step``; must be a whole multiple of ``step``.
+    step_multiples : {"component": m}, m >= 1: that component steps by ``m*step``.
+    model_exchange : components to run through their Model Exchange interface.
+    tolerance : relative tolerance of CVode for Model Exchange components.
+    loop_solver : "newton" | "fixed-point"; loop_tolerance, max_loop_iterations: its stopping rule.
+    progress : print a progress bar on stderr.
+    """
+
+    def __init__(self, system_or_path, step: float, *, algorithm: str = "gauss-seidel", record: list[str] | None = None,
+                 output_interval: float | None = None, step_multiples: dict[str, int] | None = None,
+                 model_exchange: list[str] | None = None, tolerance: float = 1e-8, loop_solver: str = "newton",
+                 loop_tolerance: float = 1e-13, max_loop_iterations: int = 50, progress: bool = False):
+        if not (isinstance(step, (int, float)) and math.isfinite(step) and step > 0):
+            raise ValueError(f"step must be a finite number > 0 s, got {step!r}")
+        if algorithm not in ALGORITHMS:
+            raise ValueError(f"algorithm must be one of {ALGORITHMS}, got {algorithm!r}")
+        if loop_solver not in LOOP_SOLVERS:
+            raise ValueError(f"loop_solver must be one of {LOOP_SOLVERS}, got {loop_solver!r}")
+        if not (0 < tolerance < 1):
+            raise ValueError(f"tolerance must be in (0, 1), got {tolerance!r}")
+        self.system = system_or_path if isinstance(system_or_path, System) else read_ssp(system_or_path)
+        self.system.validate()
+        self.step = float(step)
+        self.algorithm = algorithm
+        self.loop_solver = loop_solver
+        self.loop_tolerance = loop_tolerance
+        self.max_loop_iterations = max_loop_iterations
+        self.tolerance = tolerance
+        self.progress = progress
+        self.output_interval = self._interval(output_interval)
+        names = list(self.system.components)
+        self.multiples = self._multiples(step_multiples or {}, names)
+        for name in model_exchange or ():
+            if name not in self.system.components:
+                raise ValueError(f"model_exchange names unknown component {name!r} (components: {', '.join(names)})")
+        for c in self.system.connections:
+            if self.system.components[c.end_component].connectors[c.end_connector].type != "Real":
+                raise ValueError(f"connection {c.start} -> {c.end}: the master connects Real variables only")
+
+        self.units, self._folders = load_units([(n, self.system.components[n].fmu) for n in names], set(model_exchange or ()))
+        # Released by close(), or when the master is collected or the interpreter exits without
+        # close(): weakref.finalize runs from an atexit hook while modules can still be used,
+        # where a __del__ at shutdown found the import machinery (sys.meta_path) already gone.
+        self._finalizer = weakref.finalize(self, _release, self.units, self._folders)
+        self._unit = {u.name: u for u in self.units}
+        try:
+            self._build(record)
+            self._apply_bindings()
+        except BaseException:
+            self.close()
+            raise
+        self._state = "instantiated"
+
+    # ----------------------------------------------------------------------------- set-up
+    def _interval(self, output_interval):
+        if output_interval is None:
+            return 1
+        ratio = output_interval / self.step
+        every = round(ratio)
+        if every < 1 or abs(every - ratio) > 1e-9 * ratio:
+            raise ValueError(f"output_interval must be a whole multiple of step {self.step!r} s, got {output_interval!r}")
+        return every
+
+    @staticmethod
+    def _multiples(multiples: dict, names: list[str]) -> dict[str, int]:
+        result = dict.fromkeys(names, 1)
+        for name, m in multiples.items():
+            if name not in result:
+                raise ValueError(f"step_multiples names unknown component {name!r} (components: {', '.join(names)})")
+            if not (isinstance(m, int) and m >= 1):
+                raise ValueError(f"step_multiples[{name!r}] must be an integer >= 1, got {m!r}")
+            result[name] = m
+        return result
+
+    def _build(self, record):
+        system = self.system
+        if record is None:
+            record = [f"{u.name}.{v.name}" for u in self.units for v in u.description.modelVariables
+                      if v.causality == "output" and v.type == "Real"]
+        self.record = list(record)
+        inputs = {u.name: [] for u in self.units}
+        reads = {u.name: [] for u in self.units}
+        for c in system.connections:
+            inputs[c.end_component].append(c.end_connector)
+            if c.start_connector not in reads[c.start_component]:
+                reads[c.start_component].append(c.start_connector)
+        self._record_sources = []
+        for reference in self.record:
+            component, variable = _split(reference, "record entry")
+            if component not in self._unit:
+                raise ValueError(f"record entry {reference!r} names unknown component {component!r}")
+            self._unit[component].variable(variable)
+            if variable not in reads[component]:
+                reads[component].append(variable)
+            self._record_sources.append((component, reads[component].index(variable)))
+        for unit in self.units:
+            unit.configure(inputs[unit.name], reads[unit.name])
+        # ops[name]: how each input of that component is computed from an output slot.
+        self._ops = {u.name: [] for u in self.units}
+        for c in system.connections:
+            source = self._unit[c.start_component]
+            self._ops[c.end_component].append(
+                (inputs[c.end_component].index(c.end_connector), source, reads[c.start_component].index(c.start_connector), c.factor, c.offset))
+        if self.algorithm == "jacobi":
+            self.stages = [Stage([u.name]) for u in self.units]
+        else:
+            dependencies = {u.name: output_dependencies(u.description) for u in self.units}
+            self.stages = schedule(list(system.components), system.connections, dependencies)
+            for stage in self.stages:
+                if stage.is_loop:
+                    stuck = [n for n in stage.components if not self._unit[n].can_roll_back]
+                    if stuck:
+                        raise AlgebraicLoopError(
+                            f"algebraic loop through {', '.join(stage.loop_variables)} needs FMU state rollback, "
+                            f"but {', '.join(stuck)} cannot get/set its FMU state (canGetAndSetFMUstate is false); "
+                            f"run it with algorithm='jacobi' or break the loop", stage.loop_variables)
+                    if any(self.multiples[n] != 1 for n in stage.components):
+                        raise ValueError(f"components of the algebraic loop through {', '.join(stage.loop_variables)} "
+                                         f"must share the macro step; remove them from step_multiples")
+        self._loops = [s for s in self.stages if s.is_loop]
+        # Gauss-Seidel passes feed-through outputs on as read before the step (module docstring).
+        self._early = {}
+        if self.algorithm != "jacobi":
+            for stage in self.stages:
+                if stage.is_loop:
+                    continue
+                unit = self._unit[stage.components[0]]
+                dependencies = output_dependencies(unit.description)
+                slots = {reads[unit.name].index(name) for name in reads[unit.name]
+                         if name in dependencies and _feeds_through(dependencies, name)}
+                if slots:
+                    self._early[unit.name] = (slots, (c_double * unit.n_out)())
+        self._tear_slots = [self._tears(stage) for stage in self._loops]
+        self._run_chunk = self._compile()
+
+    def _tears(self, stage):
+        """For each torn input: (unit, input index, source unit, source slot, factor, offset)."""
+        slots = []
+        for component, connector in stage.tears:
+            unit = self._unit[component]
+            d = unit.inputs.index(connector)
+            for index, source, s, f, o in self._ops[component]:
+                if index == d:
+                    slots.append((unit, d, source, s, f, o))
+        return slots
+
+    def _apply_bindings(self):
+        for unit in self.units:
+            try:
+                unit.apply_values(self.system.parameter_values(unit.name))
+            except FMUFailure as failure:
+                raise self._error(failure, self.system.start_time, None) from None
+
+    # ----------------------------------------------------------------------------- code generation
+    def _compile(self):
+        """Generate ``run_chunk(k0, k1, row, t0, h, t_stop, last, buf)`` for this system and scheme."""
+        env = {"fail": self._fail, "solve_loop": self._solve_loop, "min": min}
+        index = {u.name: i for i, u in enumerate(self.units)}
+        for i, u in enumerate(self.units):
+            env.update({f"c{i}": u.c, f"set{i}": u.set_real, f"get{i}": u.get_real, f"do{i}": u.do_step,
+                        f"ivr{i}": u.in_vr, f"iv{i}": u.in_val, f"ovr{i}": u.out_vr, f"ov{i}": u.out_val,
+                        f"nin{i}": u.n_in_arg, f"nout{i}": u.n_out_arg, f"ta{i}": u.time_arg, f"ha{i}": u.step_arg,
+                        f"unit{i}": u})
+            if u.name in self._early:
+                env[f"ev{i}"] = self._early[u.name][1]
+        lines = ["def run_chunk(k0, k1, row, t0, h, t_stop, last, buf, every):",
+                 "    for k in range(k0, k1):",
+                 "        t = t0 + k * h",
+                 "        dt = h if k != last else t_stop - t"]
+
+        def due(i):
+            m = self.multiples[self.units[i].name]
+            return None if m == 1 else f"k % {m} == 0"
+
+        def ends(i):
+            m = self.multiples[self.units[i].name]
+            return None if m == 1 else f"(k + 1) % {m} == 0 or k == last"
+
+        def input_lines(i, indent):
+            out = []
+            for d, source, s, f, o in self._ops[self.units[i].name]:
+                j = index[source.name]
+                early = source.name in self._early and s in self._early[source.name][0]
+                expression = f"{'ev' if early else 'ov'}{j}[{s}]" + ("" if f == 1.0 else f" * {f!r}") + ("" if o == 0.0 else f" + {o!r}")
+                out.append(f"{indent}iv{i}[{d}] = {expression}")
+            return out
+
+        def step_lines(i, indent, with_inputs):
+            unit = self.units[i]
+            m = self.multiples[unit.name]
+            h_expression = "dt" if m == 1 else f"min({m!r} * h, t_stop - t)"
+            out = input_lines(i, indent) if with_inputs else []
+            if unit.n_in:
+                out.append(f"{indent}if (status := set{i}(c{i}, ivr{i}, nin{i}, iv{i})) > 1: fail({i}, 'fmi2SetReal', t, status)")
+            if unit.name in self._early:
+                out.append(f"{indent}if (status := get{i}(c{i}, ovr{i}, nout{i}, ev{i})) > 1: fail({i}, 'fmi2GetReal', t, status)")
+            if isinstance(unit, ModelExchangeUnit):
+                out.append(f"{indent}unit{i}.step(t, {h_expression})")
+            else:
+                out.append(f"{indent}ta{i}.value = t")
+                out.append(f"{indent}ha{i}.value = {h_expression}")
+                out.append(f"{indent}if (status := do{i}(c{i}, ta{i}, ha{i}, 0)) > 1: fail({i}, 'fmi2DoStep', t, status)")
+            return out
+
+        def read_lines(i, indent):
+            unit = self.units[i]
+            if not unit.n_out:
+                return []
+            return [f"{indent}if (status := get{i}(c{i}, ovr{i}, nout{i}, ov{i})) > 1: fail({i}, 'fmi2GetReal', t + dt, status)"]
+
+        def guarded(condition, body):
+            if condition is None:
+                return [f"        {line}" for line in body]
+            return [f"        if {condition}:"] + [f"            {line}" for line in body]
+
+        body = []
+        if self.algorithm == "jacobi":
+            for i in range(len(self.units)):
+                body += guarded(due(i), input_lines(i, ""))
+            for i in range(len(self.units)):
+                body += guarded(due(i), step_lines(i, "", with_inputs=False))
+                body += guarded(ends(i), read_lines(i, ""))
+        else:
+            loop_number = 0
+            for stage in self.stages:
+                if stage.is_loop:
+                    body.append(f"        solve_loop({loop_number}, t, dt)")
+                    loop_number += 1
+                    continue
+                i = index[stage.components[0]]
+                body += guarded(due(i), step_lines(i, "", with_inputs=True))
+                condition = ends(i)
+                if self._reads_only_to_record(stage.components[0]):
+                    recording = "(k + 1) % every == 0 or k == last"
+                    condition = recording if condition is None else f"({condition}) and ({recording})"
+                body += guarded(condition, read_lines(i, ""))
+        lines += body
+        recorded = ", ".join(f"ov{index[c]}[{s}]" for c, s in self._record_sources)
+        lines += ["        if (k + 1) % every == 0 or k == last:",
+                  f"            buf[row] = (t + dt, {recorded})" if recorded else "            buf[row] = (t + dt,)",
+                  "            row += 1",
+                  "    return row"]
+        source = "\n".join(lines)
+        namespace = dict(env)
+        exec(compile(source, f"<shapefmu master for {self.system.name}>", "exec"), namespace)  # noqa: S102
+        self._source = source
+        return namespace["run_chunk"]
+
+    def _reads_only_to_record(self, name: str) -> bool:
+        """Whether every connected output of ``name`` is passed on as read before its step, so the
+        read after the step serves the record only (and can wait for a recording step)."""
+        if name not in self._early:
+            return False
+        early = self._early[name][0]
+        return all(s in early for ops in self._ops.values() for _, source, s, _, _ in ops if source.name == name)
+
+    def _fail(self, i, call, t, status):
+        raise FMUFailure(self.units[i], call, status, time=t)
+
+    # ----------------------------------------------------------------------------- running
+    def run(self, stop_time: float, parameters: dict[str, float] | None = None) -> np.ndarray:
+        """Initialise, step to ``stop_time`` and return the recorded results (structured array).
+
+        ``parameters`` ({"component.variable": value}) apply to this run only, after the system's
+        parameter bindings. A second call starts again from a reset (see :meth:`reset`).
+        """
+        if self._state == "closed":
+            raise ValueError("this Master is closed")
+        t0 = self.system.start_time
+        if not (math.isfinite(stop_time) and stop_time > t0):
+            raise ValueError(f"stop_time must be a finite number > start time {t0!r} s, got {stop_time!r}")
+        grouped = self._check_parameters(parameters or {})
+        if self._state != "instantiated":
+            self.reset()
+        self._state = "running"
+        span = (stop_time - t0) / self.step
+        n_steps = max(1, math.ceil(span - 1e-9))
+        last = n_steps - 1
+        rows = 1 + n_steps // self.output_interval + (1 if n_steps % self.output_interval else 0)
+        buf = np.empty(rows, dtype=[("time", "f8")] + [(name, "f8") for name in self.record])
+        self._buf, self._row = buf, 0
+        t = t0
+        try:
+            self._initialize(t0, grouped)
+            buf[0] = (t0, *(self._unit[c].out_val[s] for c, s in self._record_sources))
+            self._row = 1
+            chunk = max(1, min(n_steps, 10000, n_steps // 100 or 1))
+            bar = _ProgressBar(n_steps) if self.progress else None
+            for k0 in range(0, n_steps, chunk):
+                t = t0 + k0 * self.step
+                k1 = min(n_steps, k0 + chunk)
+                self._row = self._run_chunk(k0, k1, self._row, t0, self.step, stop_time, last, buf, self.output_interval)
+                if bar:
+                    bar.update(k1)
+            if bar:
+                bar.close()
+        except FMUFailure as failure:
+            self._state = "failed"
+            raise self._error(failure, failure.time if failure.time is not None else t, buf[: self._row].copy()) from None
+        except KeyboardInterrupt:
+            self._state = "failed"
+            raise CosimInterrupted(t, buf[: self._row].copy()) from None
+        self._state = "finished"
+        return buf
+
+    def _check_parameters(self, parameters: dict) -> dict[str, dict]:
+        grouped = {u.name: {} for u in self.units}
+        for reference, value in parameters.items():
+            component, variable = _split(reference, "parameter name")
+            if component not in self._unit:
+                raise ValueError(f"parameter {reference!r} names unknown component {component!r}")
+            self._unit[component].variable(variable)
+            grouped[component][variable] = value
+        return grouped
+
+    def _error(self, failure: FMUFailure, t, partial) -> CosimError:
+        unit = failure.unit
+        detail = f"; FMU log: {' | '.join(unit.messages)}" if unit.messages else ""
+        when = f"t = {t:.9g} s" if t is not None else "set-up"
+        return CosimError(f"component {unit.name!r} ({unit.fmu_path.name}): {failure.call} returned {failure.status} "
+                          f"at {when}{detail}", component=unit.name, call=failure.call, time=t, partial=partial)
+
+    def _initialize(self, t0: float, parameters: dict[str, dict]) -> None:
+        for unit in self.units:
+            unit.setup(t0)
+            unit.apply_values(parameters[unit.name])
+            unit.enter_initialization()
+        if self.algorithm == "jacobi":
+            for _ in range(len(self.units)):
+                for unit in self.units:
+                    unit.read()
+                self._transfer_all()
+                for unit in self.units:
+                    unit.set_inputs()
+        else:
+            loop_number = 0
+            for stage in self.stages:
+                if stage.is_loop:
+                    self._solve_loop(loop_number, t0, 0.0, initializing=True)
+                    loop_number += 1
+                    continue
+                unit = self._unit[stage.components[0]]
+                self._transfer(unit)
+                unit.set_inputs()
+                unit.read()
+        for unit in self.units:
+            unit.exit_initialization(t0, self.tolerance)
+        for unit in self.units:
+            unit.read()
+            if unit.name in self._early:
+                early = self._early[unit.name][1]
+                early[:] = unit.out_val[: unit.n_out]
+
+    def _transfer(self, unit) -> None:
+        values = unit.in_val
+        for d, source, s, f, o in self._ops[unit.name]:
+            values[d] = source.out_val[s] * f + o
+
+    def _transfer_all(self) -> None:
+        for unit in self.units:
+            self._transfer(unit)
+
+    def _solve_loop(self, number: int, t: float, dt: float, initializing: bool = False) -> None:
+        """Step a loop group so its torn inputs equal the outputs feeding them (module docstring)."""
+        stage, slots = self._loops[number], self._tear_slots[number]
+        units = [self._unit[n] for n in stage.components]
+        if not initializing:
+            for unit in units:
+                unit.save_state()
+        evaluations = 0
+
+        def evaluate(x):
+            nonlocal evaluations
+            if evaluations and not initializing:
+                for unit in units:
+                    unit.restore_state()
+            evaluations += 1
+            for unit in units:
+                self._transfer(unit)
+                for (owner, d, *_), value in zip(slots, x):
+                    if owner is unit:
+                        unit.in_val[d] = value
+                unit.set_inputs()
+                if not initializing:
+                    unit.step(t, dt)
+                unit.read()
+            return np.array([source.out_val[s] * f + o for _, _, source, s, f, o in slots])
+
+        x = np.array([source.out_val[s] * f + o for _, _, source, s, f, o in slots])
+        gx = evaluate(x)
+        for _ in range(self.max_loop_iterations):
+            residual = gx - x
+            if np.max(np.abs(residual)) <= self.loop_tolerance * (1.0 + np.max(np.abs(x))):
+                return
+            if self.loop_solver == "fixed-point":
+                x = gx
+            else:
+                jacobian = np.empty((len(x), len(x)))
+                for j in range(len(x)):
+                    delta = 1e-7 * max(1.0, abs(x[j]))
+                    shifted = x.copy()
+                    shifted[j] += delta
+                    jacobian[:, j] = (evaluate(shifted) - gx) / delta
+                try:
+                    x = x - np.linalg.solve(jacobian - np.eye(len(x)), residual)
+                except np.linalg.LinAlgError:
+                    raise FMUFailure(units[0], f"algebraic loop through {', '.join(stage.loop_variables)} (singular Newton matrix)",
+                                     "no solution", time=t) from None
+            gx = evaluate(x)
+        raise FMUFailure(units[0], f"algebraic loop through {', '.join(stage.loop_variables)}",
+                         f"no convergence in {self.max_loop_iterations} iterations (residual {np.max(np.abs(gx - x)):.3g})", time=t)
+
+    def reset(self) -> None:
+        """Back to the freshly instantiated state with the SSP parameter bindings re-applied.
+
+        Uses ``fmi2Reset`` on every FMU (no re-extraction or re-loading).
+        """
+        if self._state == "closed":
+            raise ValueError("this Master is closed")
+        try:
+            for unit in self.units:
+                unit.reset()
+            self._apply_bindings()
+        except FMUFailure as failure:
+            raise self._error(failure, None, None) from None
+        self._state = "instantiated"
+
+    def close(self) -> None:
+        """Free every FMU instance and remove the extracted files."""
+        release = getattr(self, "_finalizer", None)  # absent if the constructor failed before loading
+        if release is not None:
+            release()  # a weakref.finalize runs once: closing twice is harmless
+        self.units, self._folders = [], []
+        self._state = "closed"
+
+    def __enter__(self) -> Master:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+def _release(units, folders) -> None:
+    """Free the FMU instances ``units`` and remove the extracted FMU folders ``folders``."""
+    for unit in units:
+        unit.free()
+    for folder in folders:
+        shutil.rmtree(folder, ignore_errors=True)
+
+
+class _ProgressBar:
+    """A one-line progress bar on stderr, updated at most ten times a second."""
+
+    def __init__(self, total: int):
+        self.total, self.start, self.shown = total, wallclock.perf_counter(), 0.0
+
+    def update(self, done: int) -> None:
+        now = wallclock.perf_counter()
+        if now - self.shown < 0.1 and done < self.total:
+            return
+        self.shown = now
+        fraction = done / self.total
+        rate = done / max(now - self.start, 1e-9)
+        bar = "#" * int(30 * fraction)
+        sys.stderr.write(f"\r[{bar:<30}] {100 * fraction:5.1f} %  {rate:,.0f} steps/s")
+        sys.stderr.flush()
+
+    def close(self) -> None:
+        sys.stderr.write("\n")
+
+
+def simulate(system_or_path, stop_time: float, step: float, *, parameters: dict | None = None, **kwargs) -> np.ndarray:
+    """Run ``system_or_path`` once with :class:`Master` and return the recorded results."""
+    with Master(system_or_path, step, **kwargs) as master:
+        return master.run(stop_time, parameters=parameters)
+
+
+def save_results(results: np.ndarray, path) -> Path:
+    """Write results to ``.csv`` (header = field names) or ``.parquet`` (needs pyarrow)."""
+    path = Path(path)
+    if path.suffix == ".csv":
+        np.savetxt(path, results.view((np.float64, len(results.dtype.names))) if len(results) else np.empty((0, len(results.dtype.names))),
+                   delimiter=",", header=",".join(results.dtype.names), comments="", fmt="%.17g")
+    elif path.suffix == ".parquet":
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+
+        pq.write_table(pa.table({name: results[name] for name in results.dtype.names}), path)
+    else:
+        raise ValueError(f"results path must end in .csv or .parquet, got {path.name!r}")
+    return path

@@ -1,0 +1,500 @@
+"""SSP 1.0 system descriptions: read and write ``.ssd``, ``.ssp`` and ``.ssv`` files.
+
+A :class:`System` is a set of FMU components, the connections between their connectors (each with
+an optional SSP linear transformation ``u = factor * y + offset``), parameter bindings (inline
+``ssv:ParameterSet`` values or ``.ssv`` files) and the default experiment. It is built either from a
+file (:func:`read_ssp`) or in Python::
+
+    system = (System("seek")
+              .add("shaper", "fmus/Shaper.fmu", {"omega": 12566.4})
+              .add("plant", "fmus/DiskDrive.fmu")
+              .connect("shaper.y", "plant.voltage"))
+    system.write_ssp("seek.ssp")          # the FMUs travel under resources/
+
+The written ``.ssd`` uses only SSP 1.0 elements that libcosim and ecos read (components with typed
+connectors, ``ssc:LinearTransformation``, ``ssd:ParameterBinding`` with inline values or an ``.ssv``
+source), so the same file runs unchanged in those hosts. Annotations we do not understand (e.g.
+OSP's algorithm settings) are kept on read and written back, and otherwise ignored.
+
+Errors name the file, the element and the name: an unknown component or connector, a connection
+whose types or causalities do not fit (output -> input only), an input connected twice, a missing
+FMU file.
+"""
+
+from __future__ import annotations
+
+import atexit
+import copy
+import os
+import shutil
+import tempfile
+import zipfile
+from dataclasses import dataclass, field
+from pathlib import Path
+from xml.etree import ElementTree as ET
+
+SSD = "http://ssp-standard.org/SSP1/SystemStructureDescription"
+SSC = "http://ssp-standard.org/SSP1/SystemStructureCommon"
+SSV = "http://ssp-standard.org/SSP1/SystemStructureParameterValues"
+NAMESPACES = {"ssd": SSD, "ssc": SSC, "ssv": SSV}
+for _prefix, _uri in NAMESPACES.items():
+    ET.register_namespace(_prefix, _uri)
+
+TYPES = ("Real", "Integer", "Boolean", "String")
+# Name of every parameter set we write. ecos applies parameter sets by name at initialisation
+# (``EcosSimulation.init(parameter_set=PARAMETER_SET)``); libcosim applies every binding.
+PARAMETER_SET = "parameters"
+_PYTHON_TYPES = {"Real": float, "Integer": int, "Boolean": bool, "String": str}
+
+
+@dataclass
+class Connector:
+    """One connector of a component: an FMU variable with its causality (``kind``) and type."""
+
+    name: str
+    kind: str  # input | output | parameter | calculatedParameter | inout
+    type: str = "Real"
+
+
+@dataclass
+class Component:
+    """An FMU instance in the system. ``source`` is as written in the .ssd; ``fmu`` is resolved."""
+
+    name: str
+    fmu: Path
+    source: str
+    connectors: dict[str, Connector] = field(default_factory=dict)
+    parameters: dict[str, float | int | bool | str] = field(default_factory=dict)
+    ssv_sources: list[Path] = field(default_factory=list)  # .ssv files bound to this component
+    annotations: list[ET.Element] = field(default_factory=list)
+
+
+@dataclass(frozen=True)
+class Connection:
+    """``end = factor * start + offset`` (SSP 1.0 ssc:LinearTransformation)."""
+
+    start_component: str
+    start_connector: str
+    end_component: str
+    end_connector: str
+    factor: float = 1.0
+    offset: float = 0.0
+
+    @property
+    def start(self) -> str:
+        return f"{self.start_component}.{self.start_connector}"
+
+    @property
+    def end(self) -> str:
+        return f"{self.end_component}.{self.end_connector}"
+
+
+def _split(reference: str, what: str) -> tuple[str, str]:
+    component, dot, variable = reference.partition(".")
+    if not dot or not component or not variable:
+        raise ValueError(f"{what} must be 'component.variable', got {reference!r}")
+    return component, variable
+
+
+def _fmu_connectors(fmu: Path) -> dict[str, Connector]:
+    """Inputs, outputs and parameters of an FMU, read from its modelDescription.xml."""
+    from fmpy import read_model_description
+
+    description = read_model_description(str(fmu), validate=False)
+    connectors = {}
+    for variable in description.modelVariables:
+        if variable.causality in ("input", "output", "parameter", "calculatedParameter") and variable.type in TYPES:
+            connectors[variable.name] = Connector(variable.name, variable.causality, variable.type)
+    return connectors
+
+
+class System:
+    """An SSP system of FMU components; see the module docstring."""
+
+    def __init__(self, name: str = "system"):
+        if not name:
+            raise ValueError("system name must be a non-empty string, got ''")
+        self.name = name
+        self.components: dict[str, Component] = {}
+        self.connections: list[Connection] = []
+        self.start_time = 0.0
+        self.stop_time: float | None = None
+        self.annotations: list[ET.Element] = []  # kept from the file, written back unchanged
+        self.origin = "<System>"  # the file this system was read from, for error messages
+
+    # ----------------------------------------------------------------------------- building
+    def add(self, name: str, fmu_path, parameters: dict | None = None, ssv=None) -> System:
+        """Add the FMU at ``fmu_path`` as component ``name``, with optional parameter values.
+
+        ``parameters`` become an inline parameter binding; ``ssv`` (a path) a binding to an .ssv
+        file whose values are applied first (inline values override them, as SSP orders bindings).
+        """
+        if not name or "." in name:
+            raise ValueError(f"component name must be non-empty and contain no '.', got {name!r}")
+        if name in self.components:
+            raise ValueError(f"component {name!r} is already in system {self.name!r}")
+        fmu = Path(fmu_path)
+        if not fmu.is_file():
+            raise ValueError(f"FMU file of component {name!r} not found: {fmu}")
+        component = Component(name, fmu.resolve(), str(fmu), _fmu_connectors(fmu))
+        if ssv is not None:
+            ssv = Path(ssv)
+            if not ssv.is_file():
+                raise ValueError(f"parameter file of component {name!r} not found: {ssv}")
+            component.ssv_sources.append(ssv.resolve())
+        component.parameters.update(self._checked_parameters(component, parameters or {}, f"component {name!r}"))
+        self.components[name] = component
+        return self
+
+    def connect(self, start: str, end: str, factor: float = 1.0, offset: float = 0.0) -> System:
+        """Connect output ``start`` ("comp.y") to input ``end`` ("comp.u"): end = factor*start + offset."""
+        start_component, start_connector = _split(start, "connection start")
+        end_component, end_connector = _split(end, "connection end")
+        connection = Connection(start_component, start_connector, end_component, end_connector, float(factor), float(offset))
+        self._check_connection(connection, f"connection {start} -> {end}")
+        self.connections.append(connection)
+        return self
+
+    # ----------------------------------------------------------------------------- queries
+    def parameter_values(self, component: str) -> dict:
+        """Every value bound to ``component``: its .ssv files first, then inline values."""
+        item = self.components[component]
+        values = {}
+        for ssv in item.ssv_sources:
+            values.update(read_ssv(ssv))
+        values.update(item.parameters)
+        return values
+
+    def validate(self) -> System:
+        """Check every component's FMU exists and every connection fits; return self."""
+        for component in self.components.values():
+            if not component.fmu.is_file():
+                raise ValueError(f"{self.origin}: Component {component.name!r}: FMU file not found: {component.fmu}")
+        seen = {}
+        for connection in self.connections:
+            self._check_connection(connection, f"{self.origin}: Connection {connection.start} -> {connection.end}", seen)
+        return self
+
+    def _check_connection(self, connection: Connection, where: str, seen: dict | None = None) -> None:
+        ends = []
+        for role, component_name, connector_name, allowed in (
+            ("start", connection.start_component, connection.start_connector, ("output", "calculatedParameter", "parameter")),
+            ("end", connection.end_component, connection.end_connector, ("input", "parameter")),
+        ):
+            component = self.components.get(component_name)
+            if component is None:
+                known = ", ".join(self.components) or "none"
+                raise ValueError(f"{where}: unknown component {component_name!r} (components: {known})")
+            connector = component.connectors.get(connector_name)
+            if connector is None:
+                raise ValueError(f"{where}: component {component_name!r} has no connector {connector_name!r}")
+            if connector.kind not in allowed:
+                raise ValueError(
+                    f"{where}: {role} {component_name}.{connector_name} has causality {connector.kind!r}, "
+                    f"a connection {role} must be one of {allowed}"
+                )
+            ends.append(connector)
+        if ends[0].type != ends[1].type:
+            raise ValueError(f"{where}: type mismatch, {ends[0].type} {connection.start} -> {ends[1].type} {connection.end}")
+        if ends[0].type != "Real" and (connection.factor != 1.0 or connection.offset != 0.0):
+            raise ValueError(f"{where}: a linear transformation needs Real connectors, got {ends[0].type}")
+        already = seen if seen is not None else {c.end: c for c in self.connections}
+        if connection.end in already:
+            raise ValueError(f"{where}: input {connection.end} is already connected from {already[connection.end].start}")
+        if seen is not None:
+            seen[connection.end] = connection
+
+    def _checked_parameters(self, component: Component, values: dict, where: str) -> dict:
+        checked = {}
+        for name, value in values.items():
+            connector = component.connectors.get(name)
+            if connector is None:
+                raise ValueError(f"{where}: FMU {component.fmu.name} has no parameter or input {name!r}")
+            try:
+                checked[name] = _PYTHON_TYPES[connector.type](value)
+            except (TypeError, ValueError):
+                raise ValueError(f"{where}: parameter {name!r} must be {connector.type}, got {value!r}") from None
+        return checked
+
+    # ----------------------------------------------------------------------------- writing
+    def write_ssd(self, path) -> Path:
+        """Write ``SystemStructure.ssd``-style XML to ``path``; FMU sources relative to its folder."""
+        path = Path(path)
+        sources = {name: os.path.relpath(c.fmu, path.parent.resolve()) for name, c in self.components.items()}
+        ssv = {name: [os.path.relpath(s, path.parent.resolve()) for s in c.ssv_sources] for name, c in self.components.items()}
+        path.write_bytes(self._xml(sources, ssv))
+        return path
+
+    def write_ssp(self, path) -> Path:
+        """Write an .ssp archive: SystemStructure.ssd plus the FMUs and .ssv files under resources/."""
+        path = Path(path)
+        names: dict[Path, str] = {}
+        sources, ssv = {}, {}
+        for name, component in self.components.items():
+            sources[name] = "resources/" + _unique_name(names, component.fmu, name)
+            ssv[name] = ["resources/" + _unique_name(names, s, name) for s in component.ssv_sources]
+        with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as archive:
+            archive.writestr("SystemStructure.ssd", self._xml(sources, ssv))
+            for file, arcname in names.items():
+                archive.write(file, "resources/" + arcname)
+        return path
+
+    def _xml(self, sources: dict[str, str], ssv: dict[str, list[str]]) -> bytes:
+        root = ET.Element(f"{{{SSD}}}SystemStructureDescription", {"version": "1.0", "name": self.name})
+        system = ET.SubElement(root, f"{{{SSD}}}System", {"name": self.name})
+        elements = ET.SubElement(system, f"{{{SSD}}}Elements")
+        for name, component in self.components.items():
+            item = ET.SubElement(elements, f"{{{SSD}}}Component",
+                                 {"name": name, "source": sources[name], "type": "application/x-fmu-sharedlibrary"})
+            connectors = ET.SubElement(item, f"{{{SSD}}}Connectors")
+            for connector in component.connectors.values():
+                node = ET.SubElement(connectors, f"{{{SSD}}}Connector", {"name": connector.name, "kind": connector.kind})
+                ET.SubElement(node, f"{{{SSC}}}{connector.type}")
+            if component.parameters or ssv[name]:
+                bindings = ET.SubElement(item, f"{{{SSD}}}ParameterBindings")
+                for source in ssv[name]:
+                    ET.SubElement(bindings, f"{{{SSD}}}ParameterBinding", {"source": source})
+                if component.parameters:
+                    binding = ET.SubElement(bindings, f"{{{SSD}}}ParameterBinding")
+                    values = ET.SubElement(binding, f"{{{SSD}}}ParameterValues")
+                    values.append(_parameter_set(PARAMETER_SET, component.parameters, component.connectors))
+            item.extend(copy.deepcopy(component.annotations))
+        connections = ET.SubElement(system, f"{{{SSD}}}Connections")
+        for c in self.connections:
+            node = ET.SubElement(connections, f"{{{SSD}}}Connection", {
+                "startElement": c.start_component, "startConnector": c.start_connector,
+                "endElement": c.end_component, "endConnector": c.end_connector,
+            })
+            if c.factor != 1.0 or c.offset != 0.0:
+                ET.SubElement(node, f"{{{SSC}}}LinearTransformation", {"factor": repr(c.factor), "offset": repr(c.offset)})
+        experiment = {"startTime": repr(self.start_time)}
+        if self.stop_time is not None:
+            experiment["stopTime"] = repr(self.stop_time)
+        ET.SubElement(root, f"{{{SSD}}}DefaultExperiment", experiment)
+        root.extend(copy.deepcopy(self.annotations))
+        ET.indent(root)
+        return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
+
+
+def _unique_name(names: dict[Path, str], file: Path, component: str) -> str:
+    """The file's name under resources/, prefixed by the component when two files share a name."""
+    if file in names:
+        return names[file]
+    name = file.name if file.name not in names.values() else f"{component}_{file.name}"
+    names[file] = name
+    return name
+
+
+def _parameter_set(name: str, values: dict, connectors: dict[str, Connector] | None = None) -> ET.Element:
+    parameter_set = ET.Element(f"{{{SSV}}}ParameterSet", {"version": "1.0", "name": name})
+    parameters = ET.SubElement(parameter_set, f"{{{SSV}}}Parameters")
+    for key, value in values.items():
+        kind = connectors[key].type if connectors and key in connectors else _type_of(value)
+        text = str(value).lower() if kind == "Boolean" else (repr(float(value)) if kind == "Real" else str(value))
+        node = ET.SubElement(parameters, f"{{{SSV}}}Parameter", {"name": key})
+        ET.SubElement(node, f"{{{SSV}}}{kind}", {"value": text})
+    return parameter_set
+
+
+def _type_of(value) -> str:
+    if isinstance(value, bool):
+        return "Boolean"
+    if isinstance(value, int):
+        return "Integer"
+    if isinstance(value, str):
+        return "String"
+    return "Real"
+
+
+def write_ssv(path, parameters: dict, name: str = PARAMETER_SET) -> Path:
+    """Write ``{variable: value}`` as an SSP 1.0 parameter-value file (.ssv)."""
+    path = Path(path)
+    root = _parameter_set(name, parameters)
+    ET.indent(root)
+    path.write_bytes(ET.tostring(root, encoding="UTF-8", xml_declaration=True))
+    return path
+
+
+def read_ssv(path) -> dict:
+    """``{variable: value}`` from an .ssv file (Real, Integer, Boolean and String values)."""
+    path = Path(path)
+    try:
+        root = ET.parse(path).getroot()
+    except (OSError, ET.ParseError) as error:
+        raise ValueError(f"{path}: cannot read parameter values: {error}") from None
+    return _parameter_values(root, str(path))
+
+
+def _local(tag: str) -> str:
+    return tag.rpartition("}")[2]
+
+
+def _children(node: ET.Element, name: str) -> list[ET.Element]:
+    return [child for child in node if _local(child.tag) == name]
+
+
+def _child(node: ET.Element, name: str) -> ET.Element | None:
+    found = _children(node, name)
+    return found[0] if found else None
+
+
+def _parameter_values(parameter_set: ET.Element, where: str) -> dict:
+    values = {}
+    for parameters in _children(parameter_set, "Parameters"):
+        for parameter in _children(parameters, "Parameter"):
+            name = parameter.get("name")
+            typed = next((child for child in parameter if _local(child.tag) in TYPES), None)
+            if name is None or typed is None or typed.get("value") is None:
+                raise ValueError(f"{where}: Parameter {name!r} needs a name and a Real/Integer/Boolean/String value")
+            text = typed.get("value")
+            kind = _local(typed.tag)
+            try:
+                values[name] = {"Real": float, "Integer": int, "String": str,
+                                "Boolean": lambda s: {"true": True, "false": False, "1": True, "0": False}[s]}[kind](text)
+            except (KeyError, ValueError):
+                raise ValueError(f"{where}: Parameter {name!r} has an invalid {kind} value {text!r}") from None
+    return values
+
+
+def read_ssp(path) -> System:
+    """Read an .ssp archive or an .ssd file (or a folder holding SystemStructure.ssd) into a System.
+
+    FMUs of an archive are extracted to a temporary folder that lives as long as the process.
+    """
+    path = Path(path)
+    if not path.exists():
+        raise ValueError(f"SSP file not found: {path}")
+    if path.is_dir():
+        path = path / "SystemStructure.ssd"
+    if zipfile.is_zipfile(path):
+        folder = Path(tempfile.mkdtemp(prefix=f"shapefmu_ssp_{path.stem}_"))
+        _TEMPORARY_FOLDERS.append(folder)
+        with zipfile.ZipFile(path) as archive:
+            archive.extractall(folder)
+        ssd = folder / "SystemStructure.ssd"
+        if not ssd.is_file():
+            raise ValueError(f"{path}: the archive holds no SystemStructure.ssd")
+        return _read_ssd(ssd, origin=f"{path}!SystemStructure.ssd")
+    return _read_ssd(path, origin=str(path))
+
+
+_TEMPORARY_FOLDERS: list[Path] = []
+
+
+def _remove_temporary_folders() -> None:
+    for folder in _TEMPORARY_FOLDERS:
+        shutil.rmtree(folder, ignore_errors=True)
+
+
+atexit.register(_remove_temporary_folders)
+
+
+def _read_ssd(ssd: Path, origin: str) -> System:
+    try:
+        root = ET.parse(ssd).getroot()
+    except ET.ParseError as error:
+        raise ValueError(f"{origin}: not valid XML: {error}") from None
+    if _local(root.tag) != "SystemStructureDescription":
+        raise ValueError(f"{origin}: root element must be ssd:SystemStructureDescription, got {_local(root.tag)}")
+    node = _child(root, "System")
+    if node is None:
+        raise ValueError(f"{origin}: no ssd:System element")
+    system = System(node.get("name") or root.get("name") or "system")
+    system.origin = origin
+    base = ssd.parent
+    elements = _child(node, "Elements")
+    for item in _children(elements, "Component") if elements is not None else []:
+        name = item.get("name")
+        source = item.get("source")
+        where = f"{origin}: Component {name!r}"
+        if not name or not source:
+            raise ValueError(f"{where}: needs both a name and a source")
+        if name in system.components:
+            raise ValueError(f"{where}: a component of that name already exists")
+        fmu = (base / source).resolve()
+        if not fmu.is_file():
+            raise ValueError(f"{where}: FMU file not found: {source} (looked in {base})")
+        connectors = _fmu_connectors(fmu)
+        declared = _child(item, "Connectors")
+        for connector in _children(declared, "Connector") if declared is not None else []:
+            cname = connector.get("name")
+            if cname not in connectors:
+                raise ValueError(f"{where}: Connector {cname!r} is not a variable of {source}")
+            typed = next((_local(c.tag) for c in connector if _local(c.tag) in TYPES), None)
+            if typed is not None and typed != connectors[cname].type:
+                raise ValueError(f"{where}: Connector {cname!r} is declared {typed} but the FMU has {connectors[cname].type}")
+            kind = connector.get("kind")
+            if kind is not None and kind != connectors[cname].kind and kind != "parameter":
+                raise ValueError(f"{where}: Connector {cname!r} is declared {kind} but the FMU has {connectors[cname].kind}")
+        component = Component(name, fmu, source, connectors)
+        component.annotations = [copy.deepcopy(a) for a in item if _local(a.tag) == "Annotations"]
+        bindings = _child(item, "ParameterBindings")
+        for binding in _children(bindings, "ParameterBinding") if bindings is not None else []:
+            _read_binding(system, component, binding, base, where, prefix_required=False)
+        system.components[name] = component
+    system_bindings = _child(node, "ParameterBindings")
+    for binding in _children(system_bindings, "ParameterBinding") if system_bindings is not None else []:
+        _read_binding(system, None, binding, base, f"{origin}: System {system.name!r}", prefix_required=True)
+    connections = _child(node, "Connections")
+    seen = {}
+    for index, item in enumerate(_children(connections, "Connection") if connections is not None else [], 1):
+        where = f"{origin}: Connection {index}"
+        start_component, end_component = item.get("startElement"), item.get("endElement")
+        if not start_component or not end_component:
+            raise ValueError(f"{where}: connections to the system's own connectors are not supported "
+                             f"(startElement={start_component!r}, endElement={end_component!r})")
+        factor, offset = 1.0, 0.0
+        transformation = _child(item, "LinearTransformation")
+        if transformation is not None:
+            factor = float(transformation.get("factor", 1.0))
+            offset = float(transformation.get("offset", 0.0))
+        for other in item:
+            if _local(other.tag) in ("MapTransformation", "BooleanMappingTransformation", "IntegerMappingTransformation"):
+                raise ValueError(f"{where}: {_local(other.tag)} is not supported (only LinearTransformation)")
+        connection = Connection(start_component, item.get("startConnector", ""), end_component,
+                                item.get("endConnector", ""), factor, offset)
+        system._check_connection(connection, f"{where} ({connection.start} -> {connection.end})", seen)
+        system.connections.append(connection)
+    experiment = _child(root, "DefaultExperiment")
+    if experiment is not None:
+        system.start_time = float(experiment.get("startTime", 0.0))
+        if experiment.get("stopTime") is not None:
+            system.stop_time = float(experiment.get("stopTime"))
+    system.annotations = [copy.deepcopy(a) for a in root if _local(a.tag) == "Annotations"]
+    return system
+
+
+def _read_binding(system: System, component: Component | None, binding: ET.Element, base: Path, where: str,
+                  prefix_required: bool) -> None:
+    """Apply one ssd:ParameterBinding; a system-level binding's names are ``component.variable``."""
+    if _child(binding, "ParameterMapping") is not None:
+        raise ValueError(f"{where}: ParameterMapping is not supported; bind the FMU's variable names directly")
+    prefix = binding.get("prefix", "")
+    source = binding.get("source")
+    if source is not None:
+        ssv = (base / source).resolve()
+        if not ssv.is_file():
+            raise ValueError(f"{where}: ParameterBinding source not found: {source} (looked in {base})")
+        values = read_ssv(ssv)
+    else:
+        inline = _child(binding, "ParameterValues")
+        parameter_set = _child(inline, "ParameterSet") if inline is not None else None
+        if parameter_set is None:
+            raise ValueError(f"{where}: ParameterBinding has neither a source nor inline ssv:ParameterSet values")
+        values = _parameter_values(parameter_set, where)
+        ssv = None
+    for name, value in values.items():
+        name = name[len(prefix):] if prefix and name.startswith(prefix) else name
+        target = component
+        if target is None:
+            component_name, _, name = name.partition(".")
+            target = system.components.get(component_name)
+            if target is None or not name:
+                raise ValueError(f"{where}: parameter binding names unknown component in {component_name + '.' + name!r}")
+        target.parameters.update(system._checked_parameters(target, {name: value}, where))
+    if ssv is not None and component is not None:
+        # Keep the file reference so the system is written back with the same binding; its values
+        # were merged above in file order, and parameter_values() re-reads them in the same order.
+        component.ssv_sources.append(ssv)
+        for name in values:
+            component.parameters.pop(name[len(prefix):] if prefix and name.startswith(prefix) else name, None)

@@ -1,0 +1,120 @@
+"""``shapefmu compare``: the co-simulated candidates against the design layer's exact moves.
+
+Disk drive (paper 002, Table I), X = 0.05 rad: bang-bang pulses of 1.30 ms, longer than the
+0.40 ms shaper (tests/test_optimal.py's LONG distance). FMUs stepped at h = 1 us.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from shapefmu.cosim.compare import compare, move_metrics
+from shapefmu.optimal import compare_moves
+from shapefmu.plants import load
+from shapefmu.stos import simulate_stos, stos_law
+
+MODEL = Path(__file__).resolve().parent.parent / "models" / "disk_drive.toml"
+X, H, U = 0.05, 1e-6, 11.0
+OPEN_LOOP = {"bang-bang": "rigid bang-bang", "convolution": "bang-bang * convolution (ZV per mode)",
+             "simultaneous": "bang-bang * simultaneous", "time-optimal": "time-optimal"}
+
+
+@pytest.fixture(scope="module")
+def cache(tmp_path_factory):
+    return tmp_path_factory.mktemp("compare_fmus")
+
+
+@pytest.fixture(scope="module")
+def runs(cache):
+    return compare(MODEL, X, candidates=(*OPEN_LOOP, "stos"), step=H, cache=cache)
+
+
+@pytest.fixture(scope="module")
+def design():
+    comparison = compare_moves(load(MODEL), X)
+    return {move.name: move for move in comparison.moves}
+
+
+def sampling_bound(command) -> float:
+    """Largest residual (relative to X) that sampling at H can add to an exact move.
+
+    The players hand the plant the mean of the command over each step, so a level change of du
+    inside a step keeps the impulse and moves every state x_i'' = ... + g_i u by at most
+    |g_i| du h^2 / 8 (the position of a zero-mean doublet, alpha (1 - alpha) / 2 <= 1/8; for
+    omega h = 0.02 the mode's own response changes this by (omega h)^2 ~ 4e-4). The Shaper FMU's
+    split of an off-grid impulse keeps its area and centroid: the same second-order doublet, once
+    per level change of the shaped command. Summed over the command's total variation, with the
+    largest input gain of the disk drive, |b2| = |b4i| = 2.7e3 /(V s^2)."""
+    levels = np.array([0.0, *command.levels, command.final])
+    return 2.7e3 * np.sum(np.abs(np.diff(levels))) * H**2 / 8 / X
+
+
+@pytest.mark.parametrize("name", OPEN_LOOP)
+def test_open_loop_move_time_is_the_exact_one_rounded_up_to_the_step(runs, design, name):
+    exact = design[OPEN_LOOP[name]].duration
+    assert exact <= runs.run(name).metrics.move_time < exact + H * (1 + 1e-9)
+
+
+@pytest.mark.parametrize("name", OPEN_LOOP)
+def test_open_loop_residual_agrees_with_the_exact_simulation_within_the_sampling_bound(runs, design, name):
+    move = design[OPEN_LOOP[name]]
+    # The design layer reads the free response at 400 points of one period of the 2 kHz mode, we at
+    # every step (500): a sampled maximum of the 3 kHz component falls short by up to
+    # 1 - cos(pi * 1.5 / 399) = 7e-5 of it.
+    allowed = sampling_bound(move.command) + 7e-5 * move.residual
+    assert runs.run(name).metrics.residual == pytest.approx(move.residual, rel=0, abs=allowed)
+    assert runs.run(name).metrics.peak == pytest.approx(move.peak, rel=1e-12)
+
+
+def test_shaped_and_optimal_moves_leave_only_sampling_residual_and_unshaped_leaves_vibration(runs, design):
+    assert runs.run("bang-bang").metrics.residual > 1e-2
+    for name in ("convolution", "simultaneous", "time-optimal"):
+        assert runs.run(name).metrics.residual < sampling_bound(design[OPEN_LOOP[name]].command)
+
+
+def test_ratio_is_against_the_co_simulated_time_optimal_move(runs, design):
+    optimal = runs.run("time-optimal").metrics.move_time
+    for run in runs.runs:
+        assert run.ratio == pytest.approx(run.metrics.move_time / optimal, rel=1e-15)
+    assert optimal == pytest.approx(design["time-optimal"].duration, abs=H)
+
+
+def test_stos_row_is_the_design_layers_sampled_loop_measured_the_same_way(runs):
+    plant = load(MODEL)
+    stos = runs.run("stos")
+    t = stos.results["time"]
+    reference = simulate_stos(plant, stos_law(plant, "simultaneous", H), X, H, t[-1])
+    expected = move_metrics(reference.t, reference.u, reference.x[:, 0], reference.x[:, [2, 4]].T, X, U, 1 / 2000.0)
+    # Same sampled semantics (tests/test_cosim_stos.py): equal up to rounding in the states.
+    assert stos.metrics.move_time == expected.move_time
+    assert stos.metrics.residual == pytest.approx(expected.residual, rel=0, abs=1e-12 / X)
+    assert stos.metrics.peak == pytest.approx(U, rel=1e-12)
+    # STOS is the simultaneous-shaped bang-bang in closed loop: it ends with that open-loop move.
+    assert stos.metrics.move_time == runs.run("simultaneous").metrics.move_time
+
+
+def test_cli_compare_prints_the_table_and_writes_the_plot(cache, tmp_path, capsys):
+    from shapefmu.cli import main
+
+    plot = tmp_path / "compare_disk_drive.png"
+    assert main(["compare", str(MODEL), "--distance", str(X), "--candidate", "bang-bang", "--candidate", "time-optimal",
+                 "--fmus", str(cache), "--plot", str(plot)]) == 0
+    out = capsys.readouterr().out
+    assert "bang-bang" in out and "time-optimal" in out and "vs optimal" in out
+    assert plot.read_bytes()[:4] == b"\x89PNG"
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--distance", "0"], "distance must be non-zero"),
+    (["--distance", "0.05", "--step=-1e-6"], "step must be > 0, got -1e-06"),
+])
+def test_cli_compare_refuses_bad_input(cache, capsys, argv, message):
+    from shapefmu.cli import main
+
+    with pytest.raises(SystemExit) as exit_:
+        main(["compare", str(MODEL), "--fmus", str(cache), *argv])
+    assert exit_.value.code == 2
+    assert message in capsys.readouterr().err
