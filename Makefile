@@ -4,7 +4,7 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test bench clean
+.PHONY: demo test bench examples clean
 
 $(PY):
 	$(PYTHON) -m venv $(VENV)
@@ -15,14 +15,19 @@ $(STAMP): pyproject.toml | $(PY)
 	$(PY) -m pip install --quiet -e '.[test,bench,dask]'
 	touch $(STAMP)
 
+# The main job: every FMU into fmus/, then the disk-drive seek through the co-simulation master
+# for each candidate command beside the CasADi time-optimal move.
 demo: $(STAMP)
-	$(PY) -m shapefmu design simultaneous --mode 2000:0.01 --mode 3000:0.01
-	$(PY) -m shapefmu sensitivity ei --mode 2000:0.01 --vtol 0.05 --plot results/sensitivity_ei.png
-	$(PY) examples/multimode_shapers.py
-	@echo "demo outputs are in results/"
+	$(PY) -m shapefmu build
+	$(PY) -m shapefmu compare models/disk_drive.toml --distance 0.05 --plot results/compare_disk_drive.png
+	@echo "demo outputs: FMUs in fmus/, plots in results/ (compare_disk_drive*.png)"
 
 test: $(STAMP)
 	$(PY) -m pytest -q
+
+# Every paper's script: the design layer's (examples/<topic>.py) and the FMU path's (paper00*_fmu.py).
+examples: $(STAMP)
+	@for script in examples/*.py; do echo "== $$script"; $(PY) $$script || exit 1; done
 
 bench: $(STAMP)
 	@for script in benchmarks/*.py; do echo "== $$script"; $(PY) $$script || exit 1; done

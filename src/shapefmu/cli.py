@@ -5,7 +5,15 @@
     shapefmu sensitivity KIND --mode HZ[:ZETA] [--mode ...] [--vtol V] --plot out.png
     shapefmu profile KIND --mode HZ[:ZETA] --distance D --speed V [--plot out.png] [--json]
     shapefmu plant show models/disk_drive.toml
+    shapefmu plant build models/disk_drive.toml -o fmus/DiskDrive.fmu
     shapefmu optimal models/disk_drive.toml --distance X [--u-max U] [--plot out.png]
+    shapefmu stos models/disk_drive.toml --distance X --shaper simultaneous [--ts S] [--plot out.png]
+    shapefmu build [all | shaper --kind KIND --mode HZ[:ZETA] ... -o fmus/X.fmu]
+    shapefmu build reference solution.json|table.csv [--interpolation hold|linear] -o fmus/TimeOptimal.fmu
+    shapefmu build shape-filter --kind WINDOW|TWIN-PULSE|time-frequency --mode HZ[:ZETA] [--order N] [--ts S] -o fmus/X.fmu
+    shapefmu sweep system.ssp --vary NAME=START:STOP:N [--vary NAME=V1,V2] --metric residual --out rows.parquet
+    shapefmu simulate system.ssp --stop 0.01 --step 1e-6 [--record plant.x ...] [--out r.csv] [--plot out.png]
+    shapefmu compare models/disk_drive.toml --distance X [--candidate stos ...] [--step S] [--fmus fmus] [--plot out.png]
 
 Modes are given in Hz on the command line (as a datasheet or an FFT gives them) and converted to
 rad/s for the Python API.
@@ -162,10 +170,113 @@ def _cmd_plant_show(args) -> int:
     return 0
 
 
+def _cmd_plant_build(args) -> int:
+    from shapefmu.fmi.plantgen import build_plant_fmu, model_from_file
+
+    model = model_from_file(args.file)
+    if model is None:
+        raise ValueError(f"{args.file} defines no plant() function")
+    print(f"plant FMU written to {build_plant_fmu(model, args.output)}")
+    return 0
+
+
 def _cmd_optimal(args) -> int:
     from shapefmu.optimal import optimal_report
 
     print(optimal_report(args.file, args.distance, u_max=args.u_max, plot=args.plot))
+    return 0
+
+
+def _cmd_stos(args) -> int:
+    from shapefmu.stos import stos_report
+
+    print(stos_report(args.file, args.distance, shaper=args.shaper, Ts=args.ts, t_end=args.t_end, u_max=args.u_max,
+                      plot=args.plot))
+    return 0
+
+
+def _cmd_sweep(args) -> int:
+    from shapefmu import sweep as sweeps
+
+    if args.samples is None:
+        if not args.vary or args.sample:
+            raise ValueError("give the grid with --vary NAME=START:STOP:N, or --sample NAME=LOW:HIGH with --samples N")
+        points = sweeps.grid(*args.vary)
+    else:
+        if not args.sample or args.vary:
+            raise ValueError("--samples N draws from the ranges of --sample NAME=LOW:HIGH (not --vary)")
+        points = sweeps.random_samples(args.samples, args.sample, seed=args.seed)
+    metrics, variables = sweeps.named_metrics(
+        args.metric, outputs=args.outputs, command=args.command_variable, after=args.after, position=args.position,
+        target=args.target, tolerance=args.tolerance)
+    record = args.record or variables
+    if any(ch in o for o in args.outputs for ch in "*?[") and not args.record:
+        raise ValueError(f"--outputs {args.outputs} uses patterns: name the variables to record with --record")
+    target = sweeps.cosim(args.system, step=args.step, stop_time=args.stop_time, record=record,
+                          algorithm=args.algorithm)
+    rows = sweeps.sweep(target, points, metrics=metrics, out=args.out, client=args.scheduler, n_workers=args.workers,
+                        timeout=args.timeout, resume=not args.no_resume)
+    print(sweeps.summary(rows, [m.name for m in metrics]))
+    if args.out:
+        print(f"rows written to {args.out}")
+    if args.plot:
+        y = points.names[1] if len(points.names) > 1 else None
+        path = sweeps.plot_map(rows, metrics[0].name, args.plot, x=points.names[0], y=y)
+        print(f"robustness map written to {path}")
+    return 0
+
+
+def _cmd_simulate(args) -> int:
+    from shapefmu.cosim import CosimError, CosimInterrupted, Master, save_results
+
+    parameters = {}
+    for item in args.set:
+        name, _, value = item.partition("=")
+        try:
+            parameters[name] = float(value)
+        except ValueError:
+            raise ValueError(f"--set must be component.variable=NUMBER, got {item!r}") from None
+    with Master(args.system, args.step, algorithm=args.algorithm, record=args.record, output_interval=args.output_interval,
+                model_exchange=args.model_exchange, progress=args.progress) as master:
+        try:
+            results, status = master.run(args.stop, parameters=parameters), 0
+        except (CosimError, CosimInterrupted) as error:
+            print(f"shapefmu simulate: {error}", file=sys.stderr)
+            results, status = error.partial, (130 if isinstance(error, CosimInterrupted) else 1)
+    if results is None:
+        return status
+    last = results[-1]
+    print(f"{len(results)} records to t = {last['time']:.9g} s")
+    for name in results.dtype.names[1:]:
+        print(f"  {name:30s} final {last[name]: .9g}   peak |.| {np.max(np.abs(results[name])):.6g}")
+    if args.out:
+        print(f"results written to {save_results(results, args.out)}")
+    if args.plot:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        names = results.dtype.names[1:]
+        figure, axes = plt.subplots(len(names), 1, sharex=True, figsize=(8, 2 + 1.6 * len(names)), squeeze=False)
+        for axis, name in zip(axes[:, 0], names):
+            axis.plot(results["time"], results[name])
+            axis.set_ylabel(name)
+        axes[-1, 0].set_xlabel("time [s]")
+        figure.tight_layout()
+        figure.savefig(args.plot)
+        print(f"plot written to {args.plot}")
+    return status
+
+
+def _cmd_compare(args) -> int:
+    from shapefmu.cosim.compare import compare
+
+    comparison = compare(args.file, args.distance, candidates=args.candidate or None, step=args.step, cache=args.fmus,
+                         u_max=args.u_max, tolerance=args.tolerance, plot=args.plot)
+    print(comparison.table())
+    if args.plot:
+        print(f"plot written to {args.plot}")
     return 0
 
 
@@ -204,6 +315,10 @@ def build_parser() -> argparse.ArgumentParser:
     q = plant_commands.add_parser("show", help="print a plant model's signals, parameters and modes")
     q.add_argument("file", help="plant model file, e.g. models/disk_drive.toml")
     q.set_defaults(run=_cmd_plant_show)
+    q = plant_commands.add_parser("build", help="generate and compile a native FMI 2.0 ME + CS plant FMU")
+    q.add_argument("file", help="plant model: models/*.toml, or a .py file defining plant() (models/pendulum.py)")
+    q.add_argument("-o", "--output", required=True, metavar="FMU", help="FMU to write, e.g. fmus/DiskDrive.fmu")
+    q.set_defaults(run=_cmd_plant_build)
 
     p = commands.add_parser("optimal", help="time-optimal move beside the rigid and shaped bang-bang moves")
     p.add_argument("file", help="plant model file, e.g. models/disk_drive.toml")
@@ -211,6 +326,76 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--u-max", type=float, default=None, help="input limit (default: the input's limit in the file)")
     p.add_argument("--plot", metavar="PNG", help="save u(t) of every move and the outputs of the optimal move")
     p.set_defaults(run=_cmd_optimal)
+
+    p = commands.add_parser("stos", help="shaped time-optimal closed-loop move (STOS, paper 002), sampled")
+    p.add_argument("file", help="plant model file in the form of eq. (1), e.g. models/disk_drive.toml")
+    p.add_argument("--distance", type=float, required=True, help="move distance of the rigid body")
+    p.add_argument("--shaper", choices=("convolution", "simultaneous", "zvd", "ei"), default="simultaneous",
+                   help="multi-mode shaper the law is built from (default simultaneous)")
+    p.add_argument("--ts", type=float, default=1e-6, help="sampling period of the controller in s (default 1e-6)")
+    p.add_argument("--t-end", type=float, help="simulated time in s (default: twice the rigid move + 2 ms)")
+    p.add_argument("--u-max", type=float, default=None, help="input limit (default: the input's limit in the file)")
+    p.add_argument("--plot", metavar="PNG", help="save u, x_r, x_r', x_f, x_f' against time (like Fig. 6)")
+    p.set_defaults(run=_cmd_stos)
+
+    from shapefmu.fmi.build_command import add_build_command
+
+    add_build_command(commands)
+
+    p = commands.add_parser("sweep", help="co-simulate a system over a parameter grid on Dask, one row per run")
+    p.add_argument("system", help="SSP system file (.ssp); its bytes are sent to the workers")
+    p.add_argument("--vary", action="append", default=[], metavar="NAME=SPEC",
+                   help="grid axis: NAME=START:STOP:N (linspace) or NAME=V1,V2,...; repeat for a product grid")
+    p.add_argument("--sample", action="append", default=[], metavar="NAME=LOW:HIGH", help="uniform sampling range")
+    p.add_argument("--samples", type=int, help="number of random samples drawn from the --sample ranges")
+    p.add_argument("--seed", type=int, default=0, help="seed of the random samples (default 0)")
+    p.add_argument("--metric", action="append", required=True, choices=("residual", "move_time", "peak"),
+                   help="metric per run; repeat for several")
+    p.add_argument("--outputs", action="append", default=[], metavar="VAR",
+                   help="variables whose residual vibration is measured (fnmatch patterns allowed)")
+    p.add_argument("--command", dest="command_variable", metavar="VAR", help="command variable: its rest ends the move; peak is its max |u|")
+    p.add_argument("--after", type=float, help="start of the residual window in s (default: end of the move)")
+    p.add_argument("--position", metavar="VAR", help="variable that must settle for move_time")
+    p.add_argument("--target", type=float, help="final value of --position")
+    p.add_argument("--tolerance", type=float, help="settling band half-width of move_time")
+    p.add_argument("--step", type=float, required=True, help="communication step of the master in s")
+    p.add_argument("--stop-time", type=float, required=True, help="end of each run in s")
+    p.add_argument("--record", action="append", metavar="VAR", help="variables to record (default: what the metrics read)")
+    p.add_argument("--algorithm", help="master algorithm (default: the master's)")
+    p.add_argument("--out", metavar="FILE", help="rows as .csv or .parquet, appended as runs finish")
+    p.add_argument("--no-resume", action="store_true", help="overwrite --out instead of skipping the points it has")
+    p.add_argument("--scheduler", metavar="ADDRESS", help="Dask scheduler, e.g. tcp://host:8786 (default: a local cluster)")
+    p.add_argument("--workers", type=int, help="worker processes of the local cluster (default: one per core)")
+    p.add_argument("--timeout", type=float, help="seconds a run may take before it is recorded as a timeout")
+    p.add_argument("--plot", metavar="PNG", help="robustness map of the first metric against the first two parameters")
+    p.set_defaults(run=_cmd_sweep)
+
+    p = commands.add_parser("simulate", help="run an SSP system of FMUs with the co-simulation master")
+    p.add_argument("system", help="SSP system (.ssp archive or .ssd file)")
+    p.add_argument("--stop", type=float, required=True, help="stop time in s")
+    p.add_argument("--step", type=float, required=True, help="macro (communication) step in s")
+    p.add_argument("--record", action="append", metavar="COMP.VAR", help="variable to record; repeat (default: every output)")
+    p.add_argument("--output-interval", type=float, help="record every this many s (a multiple of --step)")
+    p.add_argument("--algorithm", choices=("gauss-seidel", "jacobi"), default="gauss-seidel", help="master algorithm")
+    p.add_argument("--model-exchange", action="append", metavar="COMP", help="integrate this component as Model Exchange")
+    p.add_argument("--set", action="append", default=[], metavar="COMP.VAR=VALUE", help="parameter for this run; repeat")
+    p.add_argument("--out", metavar="FILE", help="save the results as .csv or .parquet")
+    p.add_argument("--plot", metavar="PNG", help="plot every recorded variable against time")
+    p.add_argument("--progress", action="store_true", help="show a progress bar")
+    p.set_defaults(run=_cmd_simulate)
+
+    from shapefmu.cosim.compare import CANDIDATES
+
+    p = commands.add_parser("compare", help="one plant, every candidate command, co-simulated as FMUs side by side")
+    p.add_argument("file", help="plant model in the form of eq. (1) of paper 002, e.g. models/disk_drive.toml")
+    p.add_argument("--distance", type=float, required=True, help="move distance of the rigid body")
+    p.add_argument("--candidate", action="append", choices=CANDIDATES, help="candidate to run; repeat (default: all)")
+    p.add_argument("--step", type=float, default=1e-6, help="macro step and sampling period of every FMU in s (default 1e-6)")
+    p.add_argument("--fmus", default="fmus", help="folder where the FMUs are built and reused (default fmus)")
+    p.add_argument("--u-max", type=float, default=None, help="input limit (default: the input's limit in the file)")
+    p.add_argument("--tolerance", type=float, default=1e-3, help="settling band of the move time, relative to X and U")
+    p.add_argument("--plot", metavar="PNG", help="save u, position error and deflection of every candidate")
+    p.set_defaults(run=_cmd_compare)
     return parser
 
 
