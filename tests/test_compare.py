@@ -29,7 +29,7 @@ def cache(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def runs(cache):
-    return compare(MODEL, X, candidates=(*OPEN_LOOP, "stos"), step=H, cache=cache)
+    return compare(MODEL, X, candidates=(*OPEN_LOOP, "stos-convolution", "stos-simultaneous"), step=H, cache=cache)
 
 
 @pytest.fixture(scope="module")
@@ -82,18 +82,23 @@ def test_ratio_is_against_the_co_simulated_time_optimal_move(runs, design):
     assert optimal == pytest.approx(design["time-optimal"].duration, abs=H)
 
 
-def test_stos_row_is_the_design_layers_sampled_loop_measured_the_same_way(runs):
+@pytest.mark.parametrize("shaper", ["convolution", "simultaneous"])
+def test_stos_row_is_the_design_layers_sampled_loop_measured_the_same_way(runs, shaper):
     plant = load(MODEL)
-    stos = runs.run("stos")
+    stos = runs.run(f"stos-{shaper}")
     t = stos.results["time"]
-    reference = simulate_stos(plant, stos_law(plant, "simultaneous", H), X, H, t[-1])
+    reference = simulate_stos(plant, stos_law(plant, shaper, H), X, H, t[-1])
     expected = move_metrics(reference.t, reference.u, reference.x[:, 0], reference.x[:, [2, 4]].T, X, U, 1 / 2000.0)
     # Same sampled semantics (tests/test_cosim_stos.py): equal up to rounding in the states.
     assert stos.metrics.move_time == expected.move_time
     assert stos.metrics.residual == pytest.approx(expected.residual, rel=0, abs=1e-12 / X)
     assert stos.metrics.peak == pytest.approx(U, rel=1e-12)
-    # STOS is the simultaneous-shaped bang-bang in closed loop: it ends with that open-loop move.
-    assert stos.metrics.move_time == runs.run("simultaneous").metrics.move_time
+    # STOS is the shaped bang-bang in closed loop: it ends with that open-loop move.
+    assert stos.metrics.move_time == runs.run(shaper).metrics.move_time
+
+
+def test_simultaneous_stos_is_faster_than_convolution_stos(runs):
+    assert runs.run("stos-simultaneous").metrics.move_time < runs.run("stos-convolution").metrics.move_time
 
 
 def test_cli_compare_prints_the_table_and_writes_the_plot(cache, tmp_path, capsys):

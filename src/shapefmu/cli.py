@@ -13,7 +13,7 @@
     shapefmu build shape-filter --kind WINDOW|TWIN-PULSE|time-frequency --mode HZ[:ZETA] [--order N] [--ts S] -o fmus/X.fmu
     shapefmu sweep system.ssp --vary NAME=START:STOP:N [--vary NAME=V1,V2] --metric residual --out rows.parquet
     shapefmu simulate system.ssp --stop 0.01 --step 1e-6 [--record plant.x ...] [--out r.csv] [--plot out.png]
-    shapefmu compare models/disk_drive.toml --distance X [--candidate stos ...] [--step S] [--fmus fmus] [--plot out.png]
+    shapefmu compare models/disk_drive.toml --distance X [--candidate stos-simultaneous ...] [--step S] [--fmus fmus] [--plot out.png]
 
 Modes are given in Hz on the command line (as a datasheet or an FFT gives them) and converted to
 rad/s for the Python API.

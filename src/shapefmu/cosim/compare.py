@@ -9,7 +9,8 @@ recorded runs with one rule for all (:func:`move_metrics`). The candidates:
   played by a ReferencePlayer FMU straight into the plant;
 * ``convolution`` / ``simultaneous``: the same bang-bang through a Shaper FMU, ZV per mode convolved
   (paper 002, Sec. II-A) or all modes at once (eq. 20);
-* ``stos``: the STOSController FMU in closed loop with the plant (paper 002, eqs. 7-22), with the
+* ``stos-convolution`` / ``stos-simultaneous``: the STOSController FMU in closed loop with the plant
+  (paper 002, eqs. 7-22), its law built from the convolution or the simultaneous shaper, with the
   settle controller of ``stos.stos_law`` for the sampling period ``step``;
 * ``ekf-tuned``: an EKFTuner FMU (paper 001) watches the first deflection during an identification
   move (the same bang-bang, unshaped), designs a ZVD shaper for the mode it estimates and shapes the
@@ -42,8 +43,9 @@ import numpy as np
 
 from shapefmu.runtime.checks import check_finite, check_positive
 
-CANDIDATES = ("bang-bang", "convolution", "simultaneous", "stos", "ekf-tuned", "time-optimal")
-# Shaper FMU kind per shaped candidate: "zv" given several modes convolves one ZV per mode.
+CANDIDATES = ("bang-bang", "convolution", "simultaneous", "stos-convolution", "stos-simultaneous", "ekf-tuned",
+              "time-optimal")
+# Shaper FMU kind per shaper method: "zv" given several modes convolves one ZV per mode.
 _SHAPER_KINDS = {"convolution": "zv", "simultaneous": "simultaneous"}
 _SETTLE_KEYS = ("kp", "kd", "ki", "x_enter", "v_enter", "x_exit", "v_exit")
 
@@ -316,8 +318,8 @@ def compare(plant_model, distance: float, candidates=CANDIDATES, step: float = 1
             sys_ = (system(name).add("player", player, {"table": _signal_table(rigid)})
                     .add("shaper", fmus.slave("Shaper"), shaper)
                     .connect("player.y_mean", "shaper.u").connect("shaper.y", command))
-        elif name == "stos":
-            sys_ = stos_system(plant, distance, step, fmus, u_max)
+        elif name.startswith("stos-"):
+            sys_ = stos_system(plant, distance, step, fmus, u_max, shaper=name.removeprefix("stos-"))
         else:  # ekf-tuned
             sys_, start = _ekf_tuned_system(system(name), fmus, rigid, distance, window, step, modes, command)
         results = run_system(sys_, start)
@@ -351,19 +353,22 @@ def compare(plant_model, distance: float, candidates=CANDIDATES, step: float = 1
     return comparison
 
 
-def stos_system(plant, distance: float, Ts: float, fmus: FMUCache, u_max: float | None = None):
+def stos_system(plant, distance: float, Ts: float, fmus: FMUCache, u_max: float | None = None,
+                shaper: str = "simultaneous"):
     """The SSP system STOS <-> plant: the STOSController FMU, designed like ``stos.stos_law(plant,
-    "simultaneous", Ts)`` (settle controller included) with ``target`` = ``distance`` bound as a
-    parameter, reading the measured plant's ``position`` and ``velocity`` and driving its input.
-    Run it with the macro step ``Ts``."""
+    shaper, Ts)`` (``shaper``: "convolution" or "simultaneous"; settle controller included) with
+    ``target`` = ``distance`` bound as a parameter, reading the measured plant's ``position`` and
+    ``velocity`` and driving its input. Run it with the macro step ``Ts``."""
     from shapefmu.fmi.ssp import System
     from shapefmu.plants import as_plant
     from shapefmu.stos import rigid_body, stos_law
 
     plant = as_plant(plant)
     b, damping = rigid_body(plant)
-    law = stos_law(plant, "simultaneous", Ts, u_max)
-    controller = {"b": b, "U": law.U, "damping": damping, "kind": "simultaneous", "Ts": Ts, "settle": True,
+    if shaper not in _SHAPER_KINDS:
+        raise ValueError(f"shaper must be one of {', '.join(_SHAPER_KINDS)}, got {shaper!r}")
+    law = stos_law(plant, shaper, Ts, u_max)
+    controller = {"b": b, "U": law.U, "damping": damping, "kind": _SHAPER_KINDS[shaper], "Ts": Ts, "settle": True,
                   **_modes_hz(plant), **{key: law.settle[key] for key in _SETTLE_KEYS}, "target": distance}
     return (System("stos").add("controller", fmus.slave("STOSController"), controller)
             .add("plant", fmus.plant(plant))
