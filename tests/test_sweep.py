@@ -284,6 +284,19 @@ def test_cosim_sweep_opens_the_system_once_per_worker_and_agrees_with_the_closed
     assert undamped["residual"][0] == pytest.approx(np.max(design.residual_swing(omegas)), rel=0.05)
 
 
+def test_an_ssd_sweep_ships_its_fmus_to_the_workers_and_equals_the_ssp_sweep(address, ten_pendula_ssp, tmp_path):
+    # The .ssd names its FMUs relative to itself; the workers run in their own scratch folders.
+    from shapefmu.fmi.ssp import read_ssp
+
+    ssd = read_ssp(ten_pendula_ssp).write_ssd(tmp_path / "ten_pendula.ssd")
+    points = "plant.zeta=0,0.02"
+    rows = sweeps.sweep(ten_pendula_cosim(ssd), points, metrics=[SWING], client=address, progress=False)
+    expected = sweeps.sweep(ten_pendula_cosim(ten_pendula_ssp), points, metrics=[SWING], client=address,
+                            progress=False)
+    assert list(rows["status"]) == ["ok", "ok"]
+    np.testing.assert_array_equal(rows["residual"], expected["residual"])
+
+
 def test_cosim_errors_of_a_run_are_rows(address, ten_pendula_ssp):
     # zeta = 1.5 is outside the plant FMU's damping-ratio range: that run fails, the others do not.
     rows = sweeps.sweep(ten_pendula_cosim(ten_pendula_ssp), "plant.zeta=0.01,1.5,0.02", metrics=[SWING],

@@ -304,20 +304,26 @@ class Cosim:
 
 def cosim(system, *, step: float, stop_time: float, record: Sequence[str], algorithm: str | None = None,
           opener: Callable | None = None) -> Cosim:
-    """A co-simulation target for ``sweep``: ``system`` (an ``.ssp`` path, or a
-    ``shapefmu.fmi.ssp.System``, written to an ``.ssp`` here) is read into bytes that travel to the
-    workers."""
+    """A co-simulation target for ``sweep``: ``system`` (an ``.ssp`` path; an ``.ssd`` path, whose
+    FMUs are found from its own folder; or a ``shapefmu.fmi.ssp.System``) is read into the bytes of
+    one ``.ssp`` archive, FMUs included, that travel to the workers."""
+    if isinstance(system, str) or hasattr(system, "__fspath__"):
+        path = Path(system)
+        if not path.is_file() or path.suffix.lower() not in (".ssp", ".ssd"):
+            raise ValueError(f"system must be an existing system file (.ssp or .ssd), got {str(path)!r}")
+        if path.suffix.lower() == ".ssd":
+            from shapefmu.fmi.ssp import read_ssp
+
+            # An .ssd names its FMUs by paths a worker may not have: pack them into an archive.
+            system = read_ssp(path)
     if hasattr(system, "write_ssp"):
         with tempfile.TemporaryDirectory(prefix="shapefmu-sweep-") as directory:
             path = Path(system.write_ssp(Path(directory) / f"{getattr(system, 'name', 'system')}.ssp"))
             data, file_name = path.read_bytes(), path.name
     elif isinstance(system, str) or hasattr(system, "__fspath__"):
-        path = Path(system)
-        if not path.is_file():
-            raise ValueError(f"system must be an existing system file (.ssp), got {str(path)!r}")
         data, file_name = path.read_bytes(), path.name
     else:
-        raise ValueError(f"system must be an .ssp path or a shapefmu.fmi.ssp.System, got {type(system).__name__}")
+        raise ValueError(f"system must be an .ssp or .ssd path or a shapefmu.fmi.ssp.System, got {type(system).__name__}")
     step = check_positive(step, "step")
     stop_time = check_positive(stop_time, "stop_time")
     record = (record,) if isinstance(record, str) else tuple(record)
