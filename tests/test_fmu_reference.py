@@ -3,6 +3,7 @@
 import json
 import zipfile
 import xml.etree.ElementTree as ET
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -106,3 +107,19 @@ def test_build_reference_refuses_a_missing_file(tmp_path, capsys):
         main(["build", "reference", str(tmp_path / "none.json"), "-o", str(tmp_path / "x.fmu")])
     assert exit_status.value.code == 2
     assert "cannot read table" in capsys.readouterr().err
+
+
+def test_cli_optimal_json_builds_a_player_of_that_solution(tmp_path):
+    from shapefmu.optimal import time_optimal
+    from shapefmu.plants import load
+
+    model = Path(__file__).resolve().parents[1] / "models" / "disk_drive.toml"
+    solution_file, out = tmp_path / "solution.json", tmp_path / "TimeOptimal.fmu"
+    assert main(["optimal", str(model), "--distance", "0.05", "--json", str(solution_file)]) == 0
+    assert main(["build", "reference", str(solution_file), "-o", str(out)]) == 0
+    # The solver run anew gives the same move; the FMU plays it.
+    solution = time_optimal(load(model), 0.05, 11.0)
+    h, count = _steps(solution, 40)
+    ends = np.arange(1, count + 1) * h
+    np.testing.assert_allclose([row[0] for row in run_fmpy(out, [{}] * count, h, ["y"])], solution.command(ends),
+                               rtol=0, atol=1e-12)

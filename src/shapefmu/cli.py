@@ -6,7 +6,7 @@
     shapefmu profile KIND --mode HZ[:ZETA] --distance D --speed V [--plot out.png] [--json]
     shapefmu plant show models/disk_drive.toml
     shapefmu plant build models/disk_drive.toml -o fmus/DiskDrive.fmu
-    shapefmu optimal models/disk_drive.toml --distance X [--u-max U] [--plot out.png]
+    shapefmu optimal models/disk_drive.toml --distance X [--u-max U] [--plot out.png] [--json s.json] [--csv u.csv]
     shapefmu stos models/disk_drive.toml --distance X --shaper simultaneous [--ts S] [--plot out.png]
     shapefmu build [all | shaper --kind KIND --mode HZ[:ZETA] ... -o fmus/X.fmu]
     shapefmu build reference solution.json|table.csv [--interpolation hold|linear] -o fmus/TimeOptimal.fmu
@@ -183,7 +183,8 @@ def _cmd_plant_build(args) -> int:
 def _cmd_optimal(args) -> int:
     from shapefmu.optimal import optimal_report
 
-    print(optimal_report(args.file, args.distance, u_max=args.u_max, plot=args.plot))
+    print(optimal_report(args.file, args.distance, u_max=args.u_max, plot=args.plot, json_path=args.json,
+                         csv_path=args.csv))
     return 0
 
 
@@ -325,6 +326,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--distance", type=float, required=True, help="move distance of the plant's first output")
     p.add_argument("--u-max", type=float, default=None, help="input limit (default: the input's limit in the file)")
     p.add_argument("--plot", metavar="PNG", help="save u(t) of every move and the outputs of the optimal move")
+    p.add_argument("--json", metavar="FILE", help="save the time-optimal solution as JSON (for `shapefmu build reference`)")
+    p.add_argument("--csv", metavar="FILE", help="save the time-optimal u(t) as a time,value signal table")
     p.set_defaults(run=_cmd_optimal)
 
     p = commands.add_parser("stos", help="shaped time-optimal closed-loop move (STOS, paper 002), sampled")
@@ -343,7 +346,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_build_command(commands)
 
     p = commands.add_parser("sweep", help="co-simulate a system over a parameter grid on Dask, one row per run")
-    p.add_argument("system", help="SSP system file (.ssp); its bytes are sent to the workers")
+    p.add_argument("system", help="SSP system (.ssp archive, or .ssd with its FMUs beside it); packed with its FMUs and sent to the workers as bytes")
     p.add_argument("--vary", action="append", default=[], metavar="NAME=SPEC",
                    help="grid axis: NAME=START:STOP:N (linspace) or NAME=V1,V2,...; repeat for a product grid")
     p.add_argument("--sample", action="append", default=[], metavar="NAME=LOW:HIGH", help="uniform sampling range")

@@ -28,6 +28,7 @@ import io
 import json
 import math
 import warnings
+from pathlib import Path
 from dataclasses import dataclass
 
 import casadi as ca
@@ -1081,8 +1082,11 @@ def plot_comparison(comparison: MoveComparison, plant, path) -> None:
     plt.close(fig)
 
 
-def optimal_report(path, distance: float, u_max: float | None = None, plot=None) -> str:
-    """The text of ``shapefmu optimal FILE --distance X [--u-max U] [--plot out.png]``."""
+def optimal_report(path, distance: float, u_max: float | None = None, plot=None, json_path=None,
+                   csv_path=None) -> str:
+    """The text of ``shapefmu optimal FILE --distance X [--u-max U] [--plot out.png] [--json s.json]
+    [--csv u.csv]``; the JSON and CSV files are the solution's ``to_json`` and ``to_csv``, which
+    ``shapefmu build reference`` plays back."""
     plant = as_plant(path)
     comparison = compare_moves(plant, distance, u_max)
     optimal = comparison.optimal
@@ -1090,6 +1094,11 @@ def optimal_report(path, distance: float, u_max: float | None = None, plot=None)
              f"time-optimal: T = {optimal.T:.12g} s, {len(optimal.switch_times)} switches at "
              + ", ".join(f"{s:.10g}" for s in optimal.switch_times),
              f"refined final-state residual {optimal.residual:.3e} (transcription T = {optimal.transcription_T:.10g} s)"]
+    for target, text, what in ((json_path, optimal.to_json, "solution"), (csv_path, optimal.to_csv, "signal table")):
+        if target is not None:
+            Path(target).parent.mkdir(parents=True, exist_ok=True)
+            Path(target).write_text(text())
+            lines.append(f"{what} written to {target}")
     if plot is not None:
         plot_comparison(comparison, plant, plot)
         lines.append(f"plot written to {plot}")
