@@ -341,7 +341,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--plot", metavar="PNG", help="save u, x_r, x_r', x_f, x_f' against time (like Fig. 6)")
     p.set_defaults(run=_cmd_stos)
 
-    from shapefmu.fmi.build_command import add_build_command
+    from shapefmu.build_command import add_build_command
 
     add_build_command(commands)
 
