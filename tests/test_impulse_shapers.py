@@ -175,7 +175,7 @@ def _phasor(shaper, q, zeta):
     """Residual phasor R(q) of a unit mode q * omega (omega = 1) after the last impulse, and dR/dq.
 
     |R| is the percent residual vibration of paper 000 eq. 4 (a phase factor apart), written here
-    from the impulse response itself, independently of both EI solvers' exponent bookkeeping.
+    from the impulse response itself, independently of the EI solver's exponent bookkeeping.
     """
     t, a = np.array(shaper.times), np.array(shaper.amplitudes)
     c = (t[-1] - t) * complex(-zeta, -math.sqrt(1.0 - zeta * zeta))
@@ -241,7 +241,7 @@ def _check_ei_shape(shaper, humps, zeta, vtol):
     return max(residuals)
 
 
-# zeta up to 0.3, the edges of the measured domain at zeta = 0.3 (shapers/ei.py: one-hump every
+# zeta up to 0.3, the edges of the measured domain at zeta = 0.3 (runtime/ei.py: one-hump every
 # vtol in [1e-4, 0.25], two-hump vtol <= 0.1396, three-hump vtol <= 0.0596), and the three-hump
 # fold region (vtol 0.03 to 0.05, zeta 0.26 to 0.3).
 EDGES = [(1, 0.3, 1e-4), (1, 0.3, 0.25), (2, 0.3, 1e-4), (2, 0.3, 0.1396), (3, 0.3, 1e-4), (3, 0.3, 0.0596)]
@@ -373,7 +373,7 @@ def test_property_closed_form_shapers(omega, zeta, kind):
     kind=st.sampled_from(["ei", "ei2", "ei3"]),
 )
 def test_property_ei_shapers(omega, zeta, vtol, kind):
-    # Every zeta in [0, 0.3] for vtol up to the three-hump threshold 0.0596 (shapers/ei.py), the
+    # Every zeta in [0, 0.3] for vtol up to the three-hump threshold 0.0596 (runtime/ei.py), the
     # three-hump fold region (vtol 0.03-0.05, zeta 0.26-0.3) included.
     shaper = design(kind, [(omega, zeta)], vtol=vtol)
     assert math.isclose(shaper.gain, 1.0, abs_tol=1e-12)

@@ -1,5 +1,13 @@
-"""Standard-library profile and filter construction (runtime/) against the numpy/scipy design layer."""
+"""Standard-library profile and filter construction (runtime/) against scipy, closed forms and the design layer.
 
+The design layer calls these runtime functions for every design (window filters, twin-pulse and
+time-frequency profiles), so the designs themselves are checked against independent references:
+scipy.signal.windows, the paper's closed forms, scipy's quadrature nodes and bounded minimisation.
+Where the two layers still compute differently (the design layer samples a move with numpy, the
+runtime plays it as a ``motion.PiecewiseAcceleration``) they are compared with each other.
+"""
+
+import functools
 import math
 
 import numpy as np
@@ -7,6 +15,8 @@ import pytest
 from scipy.integrate import quad
 from scipy.optimize import bisect as scipy_bisect
 from scipy.optimize import minimize_scalar
+from scipy.signal import windows
+from scipy.special import roots_legendre
 
 from shapefmu.optimal import Command, rigid_bang_bang, simulate
 from shapefmu.plants import rigid_flexible
@@ -33,13 +43,56 @@ def assert_close_relative(got, expected, tolerance):
 # --- window filters (paper 000) ----------------------------------------------------------------
 
 
+def paper_000_taps(kind, omega_n, zeta, ts, order):
+    """Taps of paper 000's filters built independently: scipy.signal.windows, then numpy.
+
+    The base window of M + 1 samples (M from the ts used: the null 2 pi m0 / M at omega_d ts;
+    three-Hanning's M from eq. (6) as printed), damping compensation and normalisation
+    (section 3), and the n-fold self-convolution of eq. (1). Default weights of the paper.
+    """
+    u = omega_n * math.sqrt(1.0 - zeta * zeta) * ts  # omega_d Ts
+
+    def length(m0):
+        return round(2.0 * math.pi * m0 / u)
+
+    if kind == "rectangle":
+        h = np.ones(length(1))
+    elif kind == "hanning":
+        h = windows.hann(length(2) + 1)
+    elif kind == "blackman":
+        h = windows.blackman(length(3) + 1)
+    elif kind == "hamming":
+        h = windows.general_hamming(length(2) + 1, 25.0 / 46.0)
+    elif kind == "three-hanning":
+        c, y = 0.25, math.cos(u)
+        b = c * c * y * y + 2 * c * c * y + c * c + 2 * c + 6 * c * y + 2 + 2 * y
+        m = round(math.pi / math.acos((c * y - c + math.sqrt(b)) / (2 * c + 2)))
+        short = windows.hann(m + 1)
+        h = windows.hann(2 * m + 1) + c * np.concatenate([short, short[1:]])
+    else:
+        m = length(2)
+        g = windows.hann(m + 1)
+        if kind == "differenced":  # k1 g + k2 dg on 0..M + 1, k1 = 1, k2 = -25 (section 8.1)
+            padded = np.append(g, 0.0)
+            h = padded - 25.0 * np.diff(padded, prepend=0.0)
+        else:  # convolved: k1 g[k - M] + k2 (g * g)[k], k1 = 1, k2 = 1/125 (section 8.2)
+            h = np.convolve(g, g) / 125.0
+            h[m : 2 * m + 1] += g
+    f = h * np.exp(-zeta * omega_n * ts * np.arange(h.size))
+    f = f / f.sum()
+    return functools.reduce(np.convolve, [f] * order)
+
+
 @pytest.mark.parametrize("kind", sorted(window_filters.WINDOW_FILTERS))
 @pytest.mark.parametrize(("zeta", "order"), [(0.0, 1), (0.05, 2), (0.2, 3)])
-def test_window_filter_taps_equal_the_design_layer(kind, zeta, order):
+def test_window_filter_taps_equal_scipy_windows_compensated_and_convolved(kind, zeta, order):
     taps, ts = window_filters.WINDOW_FILTERS[kind](2.0, zeta, 0.02, order, adjust_ts=True)
-    reference = design_window.WINDOW_FILTERS[kind](2.0, zeta, 0.02, order, adjust_ts=True)
-    assert ts == reference.ts
-    assert_close_relative(taps, reference.taps, 1e-12)
+    reference = paper_000_taps(kind, 2.0, zeta, ts, order)
+    assert_close_relative(taps, reference, 1e-12)
+    # The design layer: the runtime's order-1 taps, raised to the order with numpy.
+    design = design_window.WINDOW_FILTERS[kind](2.0, zeta, 0.02, order, adjust_ts=True)
+    assert design.ts == ts
+    assert_close_relative(design.taps, reference, 1e-12)
 
 
 def test_hanning_filter_with_exact_ts_has_the_papers_length():
@@ -48,13 +101,15 @@ def test_hanning_filter_with_exact_ts_has_the_papers_length():
     assert len(taps) == 401 and ts == math.pi / 100
 
 
-def test_window_filter_refuses_a_ts_that_makes_m_fractional_as_the_design_layer():
+def test_window_filter_refuses_a_ts_that_makes_m_fractional_naming_the_nearest_valid_ts():
+    # M = 4 pi / (omega_d ts) = 417.49: the nearest valid periods are 4 pi / 417 and 4 pi / 418.
     with pytest.raises(ValueError) as runtime_error:
         window_filters.hanning_filter(1.0, 0.0, 0.0301)
-    with pytest.raises(ValueError) as design_error:
-        design_window.hanning_filter(1.0, 0.0, 0.0301)
-    assert str(runtime_error.value) == str(design_error.value)
-    assert "which is not an integer" in str(runtime_error.value)
+    assert str(runtime_error.value) == (
+        f"ts = 0.0301 s gives M = 4*pi/(omega_d*ts) = {4 * math.pi / 0.0301:.6g}, which is not an integer; "
+        f"valid ts make M an integer >= 4, the nearest are {4 * math.pi / 417:.10g} s (M = 417), "
+        f"{4 * math.pi / 418:.10g} s (M = 418); or pass adjust_ts=True"
+    )
 
 
 @pytest.mark.parametrize(
@@ -90,20 +145,66 @@ def _design_options(kind):
     return {"attenuation": 0.05} if kind.startswith("M-") else {}
 
 
+def paper_003_timing(kind, delta_omega):
+    """(t_TP, t_BC, t_TZ, k) written out per profile from paper 003's equations.
+
+    A twin pulse with its null at w has t_TP = pi / w (k-th null: (2k - 1) pi / w, eq. 3), a boxcar
+    t_BC = 2 pi / w (eq. 2), an aligned trapezoid t_TZ = 2 pi k / w with k = ceil(d w / (2 pi v))
+    (eq. 12-17); "M-" puts the first-named component at omega_n - delta_omega and the last at
+    omega_n + delta_omega, the triple profiles keep the trapezoid at omega_n (III-G). Without a
+    boxcar the pulses are one default sample (2 pi / omega_n / 1000) wide; without a trapezoid
+    t_TZ = d / v.
+    """
+    wn, low, high = PENDULUM, PENDULUM - delta_omega, PENDULUM + delta_omega
+
+    def k(w):
+        return math.ceil(DISTANCE * w / (2.0 * math.pi * SPEED))
+
+    pi, free = math.pi, DISTANCE / SPEED
+    return {
+        "TP": (pi / wn, 2 * pi / wn / 1000, free, 0),
+        "TP:BC": (3 * pi / wn, 2 * pi / wn, free, 2),  # eq. (2)-(4), k = 2
+        "M-TP:BC": (pi / low, 2 * pi / high, free, 0),  # eq. (5), (7)
+        "M-BC:TP": (pi / high, 2 * pi / low, free, 0),  # eq. (6), (8)
+        "BC:VR": (0.0, 2 * pi / wn, free, 0),  # eq. (9)-(11)
+        "BC:TZ": (0.0, 2 * pi / wn, 2 * pi * k(wn) / wn, k(wn)),  # eq. (12)-(14)
+        "M-BC:TZ": (0.0, 2 * pi / low, 2 * pi * k(high) / high, k(high)),  # eq. (15), (18)
+        "M-TZ:BC": (0.0, 2 * pi / high, 2 * pi * k(low) / low, k(low)),  # eq. (16)-(17), (19)
+        "M-BC:TZ:TP": (pi / high, 2 * pi / low, 2 * pi * k(wn) / wn, k(wn)),  # eq. (21)
+        "M-TP:TZ:BC": (pi / low, 2 * pi / high, 2 * pi * k(wn) / wn, k(wn)),  # eq. (20), (22)
+    }[kind]
+
+
+def paper_003_magnitude(kind, t_tp, t_bc, t_tz):
+    """At omega_n: |BC TZ| / 2 where the trapezoid is mis-aligned (eq. 18-19), else |TP BC| (eq. 5-6)."""
+    w = PENDULUM
+    tp, tz = abs(1 + np.exp(-1j * w * t_tp)) / 2, abs(1 - np.exp(-1j * w * t_tz))
+    bc = abs(np.sinc(w * t_bc / (2 * math.pi)))
+    return bc * tz / 2 if kind in ("M-BC:TZ", "M-TZ:BC") else tp * bc
+
+
 @pytest.mark.parametrize("kind", twin_pulse.KINDS)
-def test_twin_pulse_profile_equals_the_design_layer(kind):
+def test_twin_pulse_profile_follows_the_paper_and_the_design_layer_samples_the_played_move(kind):
     design = twin_pulse.twin_pulse_profile(kind, PENDULUM, DISTANCE, SPEED, **_design_options(kind))
-    reference = design_twin_pulse.TWIN_PULSE_PROFILES[kind](PENDULUM, DISTANCE, SPEED, **_design_options(kind))
-    assert design.null == reference.null and design.trapezoid_aligned == reference.trapezoid_aligned
-    for name in ("delta_omega", "slew_speed", "t_tp", "t_bc", "t_tz"):
-        assert getattr(design, name) == pytest.approx(getattr(reference, name), rel=1e-12, abs=1e-15)
+    t_tp, t_bc, t_tz, k = paper_003_timing(kind, design.delta_omega)
+    assert design.null == k and design.trapezoid_aligned == ("TZ" in kind)
+    for name, expected in [("t_tp", t_tp), ("t_bc", t_bc), ("t_tz", t_tz), ("slew_speed", DISTANCE / t_tz)]:
+        assert getattr(design, name) == pytest.approx(expected, rel=1e-12, abs=1e-15)
+    if kind.startswith("M-"):  # the offset meets the requested attenuation at omega_n
+        assert paper_003_magnitude(kind, t_tp, t_bc, t_tz) == pytest.approx(0.05, rel=1e-12)
+    # The kernel is TP * BC integrated over each sample period: differences of the ramps of its two
+    # boxcars, unit area.
+    edges = np.arange(len(design.kernel) + 1) * design.ts
+    ramps = 0.5 * np.clip(edges / t_bc, 0.0, 1.0) + 0.5 * np.clip((edges - t_tp) / t_bc, 0.0, 1.0)
+    assert_close_relative(design.kernel, np.diff(ramps), 1e-12)
+    # What the FMU plays (the runtime's PiecewiseAcceleration) against the design layer's exact
+    # samples of the same move (numpy, sums of clipped boxcar ramps).
     t, acceleration, velocity, position = design.sample()
-    profile = reference.profile
+    profile = design_twin_pulse.TWIN_PULSE_PROFILES[kind](PENDULUM, DISTANCE, SPEED, **_design_options(kind)).profile
     assert_close_relative(t, profile.t, 1e-15)
     assert_close_relative(velocity, profile.velocity, 1e-12)
     assert_close_relative(position, profile.position, 1e-12)
     assert_close_relative(acceleration, profile.acceleration, 1e-12)
-    assert_close_relative(design.kernel, profile.kernel.taps, 1e-12)
 
 
 def test_twin_pulse_given_offset_equals_the_design_layer():
@@ -137,25 +238,54 @@ def test_twin_pulse_bad_parameters_are_named(options, message):
 # --- time-frequency profile (paper 004) --------------------------------------------------------
 
 
+@functools.lru_cache(maxsize=None)
+def _legendre(count):
+    return roots_legendre(count)
+
+
+def scipy_leakage(n, move_time):
+    """1 - J (eq. 18-19) as the energy of g_{phi,n} above omega_0 over pi sum g^2, with numpy.
+
+    |G(omega)|^2 is a trigonometric polynomial of degree M; scipy's Gauss-Legendre rule of M + 32
+    nodes on [omega_0, pi] integrates it to rounding (a sum of positive terms: no cancellation
+    however small 1 - J is). g from the design layer's numpy phi (eq. 12, 15).
+    """
+    m = round(move_time / TS)
+    g = design_time_frequency.phi((np.arange(m + 1) - m / 2.0) * TS, n)
+    omega_0 = OMEGA_0 * TS
+    nodes, weights = _legendre(m + 32)
+    omega = omega_0 + 0.5 * (math.pi - omega_0) * (nodes + 1.0)
+    power = np.abs(np.exp(-1j * np.outer(omega, np.arange(m + 1))) @ g) ** 2
+    return 0.5 * (math.pi - omega_0) * float(weights @ power) / (math.pi * float(g @ g))
+
+
 @pytest.mark.parametrize("n", [9.0, 11.4, 13.0])
-def test_energy_leakage_equals_the_design_layer(n):
+def test_energy_leakage_equals_gauss_legendre_quadrature_with_scipy(n):
     got = time_frequency.energy_leakage(n, OMEGA_0, TS, MOVE)
-    assert got == pytest.approx(design_time_frequency.energy_leakage(n, OMEGA_0, TS, MOVE), rel=0, abs=1e-12)
+    assert got == pytest.approx(scipy_leakage(n, MOVE), rel=0, abs=1e-12)
 
 
 # Up to 5 ms, where 1 - J falls to 2e-10: both compute it as the out-of-band energy, not 1 - J.
 @pytest.mark.parametrize("move_time", [0.5e-3, 1e-3, 1.5e-3, 2e-3, 2.5e-3, 3e-3, 3.5e-3, 4e-3, 4.5e-3, 5e-3])
-def test_optimal_scale_equals_the_design_layers_bounded_minimisation(move_time):
+def test_optimal_scale_equals_scipys_bounded_minimisation(move_time):
     n, leakage = time_frequency.optimal_scale(OMEGA_0, TS, move_time)
-    reference_n, reference_leakage = design_time_frequency.optimal_scale(OMEGA_0, TS, move_time)
-    assert abs(n - reference_n) <= 1e-6
-    assert leakage == pytest.approx(reference_leakage, rel=1e-9)
+    reference = minimize_scalar(
+        lambda x: scipy_leakage(x, move_time),
+        bounds=time_frequency.scale_bounds(TS, move_time),
+        method="bounded",
+        options={"xatol": 1e-6},
+    )
+    assert abs(n - reference.x) <= 1e-6
+    assert leakage == pytest.approx(reference.fun, rel=1e-9)
 
 
 def test_time_frequency_profile_at_a_given_scale_equals_the_design_layer():
     design = time_frequency.time_frequency_profile(OMEGA_0, TS, MOVE, 1e-3, n=11.4)
     reference = design_time_frequency.time_frequency_profile(OMEGA_0, TS, MOVE, 1e-3, n=11.4)
-    assert_close_relative(design.kernel, reference.profile.kernel.taps, 1e-12)
+    m = round(MOVE / TS)  # eq. (15): g[k] = phi_n((k - M/2) Ts), k = 0..M
+    assert_close_relative(design.kernel, design_time_frequency.phi((np.arange(m + 1) - m / 2.0) * TS, 11.4), 1e-12)
+    # What the FMU plays (held acceleration as a PiecewiseAcceleration) against the design layer's
+    # profile (the same held acceleration integrated with numpy).
     t, acceleration, velocity, position = design.sample()
     assert_close_relative(t, reference.profile.t, 1e-15)
     assert_close_relative(acceleration, reference.profile.acceleration, 1e-12)
@@ -169,12 +299,14 @@ def test_time_frequency_optimal_design_reproduces_paper_004():
     assert design.motion.distance == pytest.approx(1.0, rel=1e-12)
 
 
-def test_time_frequency_refuses_a_fractional_sample_count_as_the_design_layer():
+def test_time_frequency_refuses_a_fractional_sample_count_naming_the_nearest_move_times():
+    # 2.511 ms / 20 us = 125.55 samples: the nearest whole counts are 125 (2.5 ms) and 126 (2.52 ms).
     with pytest.raises(ValueError) as runtime_error:
         time_frequency.time_frequency_profile(OMEGA_0, TS, 2.51e-3 + 1e-6, 1.0)
-    with pytest.raises(ValueError) as design_error:
-        design_time_frequency.time_frequency_profile(OMEGA_0, TS, 2.51e-3 + 1e-6, 1.0)
-    assert str(runtime_error.value) == str(design_error.value)
+    assert str(runtime_error.value) == (
+        "move_time / ts must be an integer M >= 2, got 0.002511 / 2e-05 = 125.55; the nearest valid move "
+        "times are 0.0025 s (M = 125) and 0.00252 s (M = 126)"
+    )
 
 
 # --- shaped bang-bang (paper 002, eq. 2, 4, 21) -----------------------------------------------

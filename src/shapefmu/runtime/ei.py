@@ -1,10 +1,9 @@
-"""Extra-insensitive (EI) shapers with one, two and three humps, standard library only.
+"""Extra-insensitive (EI) shapers with one, two and three humps, exact for damping in [0, 0.3].
 
-What a Shaper FMU designs at initialisation for ``kind`` ei, ei2, ei3. Same equations, same
-continuation, same choice among several solutions, same domain and same messages as the design
-layer ``shapefmu.shapers.ei`` (numpy), whose docstring states the definition, the measured domain
-and why the first crossing is returned; ``tests/test_runtime_ei.py`` checks both give the same
-impulses to 1e-10 and refuse the same designs with the same message.
+Standard library only: what a Shaper FMU designs at initialisation for ``kind`` ei, ei2, ei3, and
+what the design layer ``shapefmu.shapers.ei`` returns as an ``ImpulseShaper`` (it calls this
+module), so the shaper analysed is the one the FMU runs. (Within the measured domain at the end of
+this docstring: for larger vtol the multi-hump designs stop short of zeta = 0.3.)
 
 API
 ---
@@ -12,33 +11,86 @@ API
 of N + 2 floats for N = 1, 2, 3 humps: times in seconds (the first 0) and positive amplitudes
 summing to 1. omega > 0 rad/s, zeta in [0, ZETA_MAX], vtol in [VTOL_MIN, VTOL_MAX].
 
-Equations (Singhose, Seering & Singer's vector-diagram formulation), in dimensionless times
-tau = omega t and R(nu) = sum_k A_k exp(nu e_k), e_k = (zeta + j sqrt(1 - zeta^2)) tau_k - zeta tau_last,
-so that the percent residual vibration at the frequency ratio nu is V(nu) = |R(nu)| / sum A:
+Definition (Singhose, Seering & Singer; the vector-diagram formulation). An N-hump EI shaper has
+N + 2 impulses. Its percent residual vibration V(nu) against the frequency ratio
+nu = omega_actual / omega (same damping ratio) has, around nu = 1, an alternating sequence of
+N + 1 zeros and N humps:
+
+    zero, hump, zero, ..., hump, zero,     every hump a local maximum of height exactly vtol,
+
+and V <= vtol between the outermost zeros. The design frequency sits on the middle element: the
+middle hump for odd N (EI, three-hump EI: V(1) = vtol, the shaper tolerates vtol at the model
+frequency to widen the band) and the middle zero for even N (two-hump EI: V(1) = 0).
+
+Equations, with dimensionless times tau = omega t and
+R(nu) = sum_k A_k exp(nu e_k), e_k = (zeta + j sqrt(1 - zeta^2)) tau_k - zeta tau_last, V = |R| / sum A:
 
     sum_k A_k = 1                                                   1
     |R(nu_h)|^2 = vtol^2,  d|R|^2/dnu (nu_h) = 0    for each hump   2N
     Re R(nu_z) = Im R(nu_z) = 0                      for each zero   2(N + 1)
 
-in the N + 2 amplitudes, the N + 1 times tau_2.. (tau_1 = 0) and the 2N + 1 hump and zero
-frequencies less the one pinned at nu = 1 (the middle hump for odd N, the middle zero for even N),
-carried as ln nu so that an outermost zero running off to large nu costs few steps: 4N + 3
-equations F(x, zeta) = 0 and unknowns x. The hump and zero locations are unknowns of the system, so
-no frequency scan is needed to solve it: at zeta = 0 they are known in closed form
-(``_undamped_extrema``), and every Newton step uses the analytic Jacobian (``_system``, including
-the column d/dzeta) in a Householder QR solve (``least_squares.solve_least_squares``).
+Unknowns: N + 2 amplitudes, N + 1 times (tau_1 = 0), and the N + (N + 1) hump and zero
+frequencies less the one pinned at nu = 1: 4N + 3 equations F(x, zeta) = 0 in 4N + 3 unknowns x.
+The frequencies are carried as ln nu, so that an outermost zero running off to large nu costs few
+continuation steps. The hump and zero locations are unknowns of the system, so no frequency scan is
+needed to solve it: at zeta = 0 they are known in closed form (``_undamped_extrema``), and every
+Newton step uses the analytic Jacobian (``_system``, including the column d/dzeta) in a Householder
+QR solve (``least_squares.solve_least_squares``).
 
-Continuation (``_follow``): pseudo-arclength in y = (x, zeta) from the undamped solution. Predict
-y + h t along the unit tangent t (null vector of dF/dy, oriented by the previous tangent); correct
-by damped Newton on F = 0 bordered by t . (y - y_pred) = 0; accept when every residual is <= 1e-10
-within 8 iterations, the correction is <= h/2 and the tangent turns by less than ~26 degrees, else
-halve h (h from 0.05, at most 1, doubled after an easy step). The first accepted point at or past
-the requested zeta brackets the first crossing, solved with zeta fixed to rounding level; a step
-that lands below zeta across a fold is halved while the cubic Hermite interpolant of zeta(s) says
-the fold may reach zeta (``_hermite_peak``). The branch ends when a frequency passes NU_MAX, when
-h falls below 1e-7, or when zeta returns below 0; the returned design must further have positive
-amplitudes, increasing times and V <= vtol (1 + 1e-6) between its outermost zeros
-(``_peak_between_zeros``: a 0.02 grid in nu, every local maximum refined by golden section).
+Continuation (``_follow``). At zeta = 0 the solution is known in closed form (times k pi,
+amplitudes in ``_undamped_amplitudes``). From there the solution curve y(s) = (x, zeta)(s) of F = 0
+is followed by pseudo-arclength continuation (Keller): a step of length h along the unit tangent t
+(the null vector of [dF/dx, dF/dzeta], oriented to continue the previous one) predicts y + h t;
+damped Newton (analytic Jacobian) corrects it on the hyperplane t . (y - y_pred) = 0. A step is
+accepted when Newton closes every residual to 1e-10 within 8 iterations, lands within h/2 of the
+prediction and turns the tangent by less than ~26 degrees; otherwise h is halved (h from 0.05, at
+most 1, doubled after an easy step). Because arclength, not zeta, is the parameter, the curve is
+followed through folds where zeta turns back (dF/dx singular), which zeta-stepping cannot pass.
+
+Which solution is returned. Some branches are S-shaped in zeta: three-hump vtol = 0.05 turns back
+at zeta ~ 0.2756 and forward again at ~ 0.2751, so three designs exist for zeta between those.
+Returned is the FIRST crossing of the requested zeta along the branch from zeta = 0: the continuous
+deformation of the undamped design for every zeta below the first fold, and, beyond it, the first
+solution the branch reaches. It is the one choice that needs no search beyond the first crossing
+(the branch is traced only until it reaches zeta) and that depends only on the branch, not on step
+sizes: a step whose end points lie below zeta across a fold is halved while the cubic Hermite
+interpolant of zeta(s) through both ends says the fold may reach zeta (``_hermite_peak``), so a
+crossing just below a fold is not stepped over. The shortest-duration solution, the alternative,
+would need the whole branch traced to its end for every design, and jumps between branches all the
+same. Consequence: at the first fold the returned design jumps (for three-hump vtol 0.05, the
+outermost zero moves from nu = 3.12 at zeta = 0.2756 to 3.57 at 0.27565). Where the first crossing
+is found it is solved at the exact zeta (Newton with zeta fixed, to rounding level).
+
+Where the branch ends. For larger vtol the multi-hump branches end at a finite zeta: the outermost
+zero runs off to infinite frequency while the last two impulses merge into a doublet (their spacing
+is about pi / nu). The branch is followed while every hump and zero stays below nu = NU_MAX = 50
+(the last two impulses then ~ T/100 apart); a zeta beyond that point is refused, as it is when h
+falls below 1e-7 or zeta returns below 0. A design is also refused when, at the requested zeta, it
+is not an EI shape: an amplitude <= 0 or times out of order, or a residual-vibration peak above
+vtol (1 + 1e-6) between the outermost zeros (``_peak_between_zeros``: a 0.02 grid in nu, every
+local maximum refined by golden section; for large vtol a further hump rises through vtol before
+the branch ends). The ValueError then says which, how far the branch reached, and the domain below.
+
+Measured domain (``_DOMAIN``): zeta on a 0.005 grid for 23 values of vtol from 1e-4 to 0.25, the
+thresholds by bisection in vtol at zeta = 0.3, the ends as the refusals report them; 300 random
+designs inside it (half in the three-hump fold region) met every constraint to 7e-16:
+    kind   every zeta in [0, 0.3] for   beyond: the branch ends at zeta =
+    ei     every vtol in [1e-4, 0.25]   -
+    ei2    vtol <= 0.1396               0.2994 (vtol 0.14), 0.2782 (0.16), 0.2594 (0.18),
+                                        0.2424 (0.2), 0.2270 (0.22), 0.2062 (0.25)
+    ei3    vtol <= 0.0596               0.2993 (vtol 0.06), 0.2830 (0.07), 0.2687 (0.08),
+                                        0.2558 (0.09), 0.2441 (0.1), 0.2236 (0.12), 0.2060 (0.14),
+                                        0.1906 (0.16), 0.1769 (0.18), 0.1647 (0.2), 0.1536 (0.22),
+                                        0.1228 (0.25)
+
+and for three-hump vtol >= ~0.17 a narrow zeta band below that end has no EI shape, because a
+fourth peak rises through vtol between the outermost humps: zeta 0.1495-0.150 at vtol 0.18,
+0.139-0.1405 at 0.2, 0.1295-0.1325 at 0.22, 0.1165-0.1225 at 0.25 (measured on a 0.0005 grid).
+
+vtol below 1e-4 is refused: as vtol -> 0 every hump merges with its neighbouring zeros (the
+undamped zeros sit about 2 sqrt(vtol) / pi from the hump), the constraint Jacobian turns singular
+and the continuation needs steps of that size (one-hump EI at vtol 1e-6 takes ~450 steps, 2 s in
+the runtime); an EI shaper of vtol < 0.01 % is in effect its zero-vibration parent (ZVD, ...).
 """
 
 import cmath
@@ -64,7 +116,7 @@ _NEWTON_ITERATIONS = 40
 _MIN_ALIGNMENT = 0.9
 _HUMP_RTOL = 1e-6
 _SHAPE_GRID = 0.02
-# What the domain scan measured (shapefmu.shapers.ei docstring); every refusal ends with its kind's line.
+# What the domain scan measured (module docstring); every refusal message ends with its kind's line.
 _DOMAIN = {
     1: (
         "measured domain of the one-hump EI: every zeta in [0, 0.3] for every vtol in [1e-4, 0.25]"
@@ -225,7 +277,7 @@ def _frequency_rows(nu, column, tau, amplitudes, zeta, layout):
 
 
 def _system(y, layout, vtol):
-    """Residuals F(y) (ordered as the design layer's) and the Jacobian dF/dy as rows."""
+    """Residuals F(y) (gain, hump levels, hump slopes, zero real, zero imaginary) and dF/dy as rows."""
     amplitudes, tau, humps, zeros, zeta = layout.split(y)
     size = layout.size
     residuals = [math.fsum(amplitudes) - 1.0]
@@ -274,8 +326,8 @@ def _newton(y, layout, vtol, border, level, tol, iterations, polish):
     """Damped Newton on the bordered system; (solution, iterations) or (None, iterations).
 
     Each step is halved (up to 10 times) until the sum of squared residuals falls. With ``polish``
-    it keeps stepping past ``tol`` while the residual still falls fast: the last digits are what
-    make the two implementations of these equations agree.
+    it keeps stepping past ``tol`` while the residual still falls fast: a returned design meets its
+    constraints to rounding level, whatever point of the branch Newton started from.
     """
     current = _evaluate(y, layout, vtol, border, level)
     if current is None:

@@ -1,9 +1,10 @@
 """Simultaneous multi-mode impulse shaper (paper 002, eq. 20), solved with the standard library only.
 
 A Shaper FMU designs this shaper from its mode parameters at the end of initialisation, in a host
-Python that may have no numpy or scipy. The design layer (``shapefmu.shapers.multimode.simultaneous``,
-scipy's MINPACK Levenberg-Marquardt) and this module solve the same equations from the same starts
-and keep the same root; ``tests/test_runtime_multimode.py`` checks that both give the same impulses.
+Python that may have no numpy or scipy. The design layer (``shapefmu.shapers.multimode.simultaneous``)
+calls ``shortest_positive_root`` of this module, so what is analysed is exactly what the FMU runs;
+``tests/test_runtime_multimode.py`` checks the root against scipy's MINPACK Levenberg-Marquardt
+from the same starts.
 
 API
 ---
@@ -13,6 +14,8 @@ API
     floats for M modes: impulse times in seconds (the first 0, strictly increasing) and positive
     amplitudes summing to 1. Raises ValueError naming the offending mode, or saying that no
     all-positive root exists (then use the convolution of single-mode shapers).
+``shortest_positive_root(checked, starts_per_axis)`` -> ``(times, amplitudes)`` or None
+    The same for modes already validated by ``check_modes``; None where no positive root exists.
 
 Equations (paper 002, eq. 20), for M modes (sigma_j = zeta_j omega_j, omega_dj = omega_j sqrt(1 - zeta_j^2))
 and M + 1 impulses a_i at t_i with t_1 = 0:
@@ -36,7 +39,7 @@ import math
 from .checks import check_count, check_omega, check_zeta
 from .least_squares import solve_least_squares
 
-# A start counts as a root when every equation holds to this (the design layer's acceptance).
+# A start counts as a root when every equation holds to this.
 _ROOT_TOL = 1e-12
 _MAX_ITERATIONS = 400
 
@@ -61,6 +64,18 @@ def simultaneous(modes, starts_per_axis=10):
     """Impulse times (s) and amplitudes of the simultaneous shaper for ``modes`` (see module docstring)."""
     checked = check_modes(modes)
     starts_per_axis = check_count(starts_per_axis, "starts_per_axis", minimum=len(checked))
+    solution = shortest_positive_root(checked, starts_per_axis)
+    if solution is None:
+        raise no_positive_root(checked, "the convolution of single-mode shapers")
+    return solution
+
+
+def shortest_positive_root(checked, starts_per_axis):
+    """(times in s, amplitudes) of the shortest all-positive root of eq. (20), or None if none is found.
+
+    ``checked`` is a list of (omega, zeta) pairs as ``check_modes`` returns it; the frequencies must
+    be distinct. Solutions are cached per mode set (``_solve``).
+    """
     if len({w for w, _ in checked}) != len(checked):
         raise ValueError(f"modes must have distinct frequencies for the simultaneous method, got {checked}")
     # Time in units of 1/omega_max, so every unknown is of order one.
@@ -68,12 +83,17 @@ def simultaneous(modes, starts_per_axis=10):
     dimensionless = tuple(sorted((w / scale, z) for w, z in checked))
     solution = _solve(dimensionless, starts_per_axis)
     if solution is None:
-        raise ValueError(
-            f"no simultaneous shaper with {len(checked) + 1} positive impulses found for modes {checked}; "
-            "use the convolution of single-mode shapers instead"
-        )
+        return None
     tau, amplitudes = solution
     return [t / scale for t in tau], list(amplitudes)
+
+
+def no_positive_root(checked, instead):
+    """The ValueError for modes without a positive root, advising ``instead``."""
+    return ValueError(
+        f"no simultaneous shaper with {len(checked) + 1} positive impulses found for modes {checked}; "
+        f"use {instead} instead"
+    )
 
 
 def _rows(tau, modes):

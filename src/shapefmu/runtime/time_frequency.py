@@ -4,9 +4,9 @@ What a ProfileGenerator or ShapeFilter FMU computes at initialisation: the sampl
 Gaussian g_{phi,n}[k] = phi_n((k - M/2) Ts), k = 0..M (eq. 12, 15), with the scale n that minimises
 the share of its energy above the first resonance, 1 - J (eq. 18-20), found by bounded Brent
 minimisation (``scalar_search.minimize_bounded``, the algorithm of Matlab's ``fminbound`` that the
-paper uses and of scipy's ``minimize_scalar(method="bounded")`` that the design layer uses).
-Same guards and messages as ``shapefmu.shapers.time_frequency``; ``tests/test_runtime_profiles.py``
-checks both agree.
+paper uses and of scipy's ``minimize_scalar(method="bounded")``). The design layer
+``shapefmu.shapers.time_frequency`` calls these functions, so what is analysed is what the FMU
+runs; ``tests/test_runtime_profiles.py`` checks them against scipy and closed forms.
 
 The objective 1 - J is computed as the energy above omega_0 over the total energy (``_leakage``),
 not as one minus the share below: near the optimum 1 - J is 1e-5 (2.5 ms moves) to 1e-10 (5 ms),
@@ -156,7 +156,7 @@ def energy_leakage(n, first_resonance, ts, move_time):
 
 
 def optimal_scale(first_resonance, ts, move_time, bounds=None):
-    """(n, 1 - J) at the n minimising 1 - J on ``bounds`` (eq. 20), n to within ~1e-6 as the design layer."""
+    """(n, 1 - J) at the n minimising 1 - J on ``bounds`` (eq. 20), n to within ~1e-6."""
     omega_0 = _omega_0(first_resonance, ts)
     lo, hi = _bounds(bounds, ts, move_time)
     m = samples(move_time, ts)
@@ -175,7 +175,7 @@ class TimeFrequencyDesign:
     motion: PiecewiseAcceleration
 
     def sample(self):
-        """The design layer's profile arrays (t, acceleration, velocity, position) on k ts, k = 0..M + 1."""
+        """Lists (t, acceleration, velocity, position) of ``motion`` on the design layer's grid k ts, k = 0..M + 1."""
         return self.motion.sample(self.ts, len(self.kernel) + 1)
 
 

@@ -1,8 +1,10 @@
 """The twin-pulse family of swing-free profiles (Bowling, Starr, Wood & Lumia, paper 003), standard library only.
 
-What a ProfileGenerator or ShapeFilter FMU computes at initialisation: the same construction, guards
-and messages as the design layer (``shapefmu.shapers.twin_pulse``, whose module docstring lists the
-OCR corrections to eq. 1, 6, 18-23), checked against it by ``tests/test_runtime_profiles.py``.
+What a ProfileGenerator or ShapeFilter FMU computes at initialisation, and what the design layer
+(``shapefmu.shapers.twin_pulse``, whose module docstring lists the OCR corrections to eq. 1, 6,
+18-23) calls for every design: the guards, the null placement, the offset search and the kernel are
+written once, here. The design layer samples the move exactly on its grid;
+``tests/test_runtime_profiles.py`` checks that those samples equal the ``motion`` played here.
 
 The acceleration is a(t) = v_slew (TP * BC * TZ)(t): twin pulse TP (impulses 1/2 at 0 and t_TP),
 unit-area boxcar BC of width t_BC, and the trapezoid's +/- impulses TZ at 0 and t_TZ (section III-A).
@@ -20,7 +22,7 @@ from .checks import check_count, check_finite, check_omega, check_positive, chec
 from .motion import PiecewiseAcceleration
 from .scalar_search import bisect
 
-# Samples per period of omega_n on the default time grid (as the design layer).
+# Samples per period of omega_n on the default time grid.
 _SAMPLES_PER_PERIOD = 1000
 
 # Per kind: (twin pulse, boxcar, trapezoid) null at omega_n + s delta_omega, s in {-1, 0, +1}, or
@@ -42,11 +44,11 @@ _MISALIGNED = tuple(kind for kind in LAYOUT if kind.startswith("M-"))
 
 
 @dataclass(frozen=True)
-class TwinPulseDesign:
-    """A designed move: its timing, the exact motion and the sampled kernel TP * BC at ``ts``.
+class TwinPulseTiming:
+    """The timing of a designed move: what the runtime's design and the design layer's profile share.
 
     ``null`` is k, the trapezoid's null index (eq. 13, 17) or the twin pulse's for TP:BC (eq. 3),
-    0 if unused; ``kernel`` is TP * BC integrated over each sample period (unit area).
+    0 if unused; ``trapezoid_aligned`` says whether t_TZ was chosen for a null or set to d / v.
     """
 
     kind: str
@@ -58,16 +60,26 @@ class TwinPulseDesign:
     t_bc: float
     t_tz: float
     trapezoid_aligned: bool
+
+    @property
+    def duration(self):
+        """Length of the move, t_TP + t_BC + t_TZ, s."""
+        return self.t_tp + self.t_bc + self.t_tz
+
+
+@dataclass(frozen=True)
+class TwinPulseDesign(TwinPulseTiming):
+    """A designed move: its timing, the exact motion and the sampled kernel TP * BC at ``ts``.
+
+    ``kernel`` is TP * BC integrated over each sample period (unit area).
+    """
+
     motion: PiecewiseAcceleration
     kernel: list
     ts: float
 
-    @property
-    def duration(self):
-        return self.t_tp + self.t_bc + self.t_tz
-
     def sample(self):
-        """The design layer's ``profile`` arrays (t, acceleration, velocity, position) at ``ts``."""
+        """Lists (t, acceleration, velocity, position) of ``motion`` on the design layer's grid k ts."""
         return self.motion.sample(self.ts, math.ceil((self.t_tp + self.t_bc + self.t_tz) / self.ts) + 2)
 
 
@@ -106,10 +118,15 @@ def _times(kind, omega_n, distance, speed, delta_omega, tp_null, pulse_width):
 def _offset_for(kind, omega_n, distance, speed, attenuation, tp_null):
     """delta_omega whose magnitude at omega_n equals ``attenuation`` (section III-C): scan, then bisect.
 
-    The magnitude is |TP BC| of the two mis-aligned components, or |BC TZ| / 2 where the trapezoid
-    is one of them (eq. 18-19); see ``shapers.twin_pulse._offset_for`` for why.
+    The magnitude is that of the two mis-aligned components: |TP BC| (eq. 5-6), or |BC TZ| / 2
+    when the trapezoid is one of them (eq. 18-19). In the triple profiles the trapezoid's null sits
+    on omega_n, so the whole spectrum vanishes there whatever delta_omega; their offset is set by
+    the TP:BC pair, the part the paper says acts alone while the load accelerates (section III-G).
+    The magnitude is 0 at delta_omega = 0 and grows with it; a scan finds the first delta_omega
+    where it exceeds the request, and bisection refines that crossing: the widest notch whose
+    centre still meets the attenuation.
     """
-    trapezoid_misaligned = bool(LAYOUT[kind][2])
+    trapezoid_misaligned = bool(LAYOUT[kind][2])  # +1 / -1; 0 (centred) and None are excluded
 
     def excess(dw):
         t_tp, t_bc, t_tz, _, _ = _times(kind, omega_n, distance, speed, dw, tp_null, 0.0)

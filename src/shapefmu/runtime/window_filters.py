@@ -1,8 +1,9 @@
 """Window-function shape filters (Zhou & Misawa, paper 000), standard library only.
 
-The taps a ShapeFilter FMU computes at initialisation from its parameters. Same construction, same
-guards and same error messages as the design layer (``shapefmu.shapers.window``, numpy), whose
-docstrings carry the derivations; ``tests/test_runtime_profiles.py`` checks the taps agree.
+The taps a ShapeFilter FMU computes at initialisation from its parameters, and the taps the design
+layer (``shapefmu.shapers.window``, whose docstrings carry the paper's derivations) returns: it
+calls these functions, so what is analysed is what the FMU runs. ``tests/test_runtime_profiles.py``
+checks the taps against windows built with ``scipy.signal.windows``.
 
 A base sequence h[k] with H(omega_d Ts) = 0 becomes the filter for the mode (omega_n, zeta) by
 damping compensation and normalisation (paper 000, Conclusion 2.1 and section 3),
@@ -84,15 +85,18 @@ def _cosine_window(m, coefficients):
     ]
 
 
-# (coefficients, null at omega_d Ts = 2 pi m0 / M, smallest M), as in shapers.window.
+# Base windows of paper 000: (coefficients of cos(2 pi i k/M), null at omega_d Ts = 2 pi m0 / M,
+# smallest M). The null of a generalised cosine window of M + 1 samples whose end samples are zero
+# sits on every DFT bin 2 pi m / M with m beyond its last cosine term; m0 is the first of them.
 _COSINE_WINDOWS = {
-    "hanning": ((0.5, -0.5), 2, 4),
-    "blackman": ((0.42, -0.5, 0.08), 3, 6),
-    "hamming": ((25.0 / 46.0, -21.0 / 46.0), 2, 4),
+    "hanning": ((0.5, -0.5), 2, 4),  # eq. (2): M = 4 pi / (omega_d Ts)
+    "blackman": ((0.42, -0.5, 0.08), 3, 6),  # section 4: M = 6 pi / (omega_d Ts)
+    "hamming": ((25.0 / 46.0, -21.0 / 46.0), 2, 4),  # section 5: approximate null only
 }
 
 
-def _cosine_base(name, omega_d, ts, adjust_ts):
+def cosine_base(name, omega_d, ts, adjust_ts):
+    """The base window ``name`` of ``_COSINE_WINDOWS`` for omega_d and ts, and the ts used."""
     coefficients, m0, minimum = _COSINE_WINDOWS[name]
     m, ts = window_length(
         omega_d,
@@ -107,6 +111,7 @@ def _cosine_base(name, omega_d, ts, adjust_ts):
 
 
 def _rectangle_length(omega_d, ts, adjust_ts):
+    # M equal samples k = 0..M-1 null every bin 2 pi m / M, m >= 1 (Zhou & Misawa 2005a).
     return window_length(
         omega_d, ts, adjust_ts, lambda u: 2.0 * math.pi / u, lambda m: 2.0 * math.pi / m, 2, "2*pi/(omega_d*ts)"
     )
@@ -118,7 +123,7 @@ def _base(base, omega_d, ts, adjust_ts):
         m, ts = _rectangle_length(omega_d, ts, adjust_ts)
         return [1.0] * m, ts
     if base in ("hanning", "blackman"):
-        return _cosine_base(base, omega_d, ts, adjust_ts)
+        return cosine_base(base, omega_d, ts, adjust_ts)
     raise ValueError(f"base must be one of 'rectangle', 'hanning', 'blackman', got {base!r}")
 
 
@@ -138,26 +143,32 @@ def rectangle_filter(omega_n, zeta, ts, order=1, *, adjust_ts=False):
 def hanning_filter(omega_n, zeta, ts, order=1, *, adjust_ts=False):
     """Hanning window h[k] = 0.5 - 0.5 cos(2 pi k / M), M = 4 pi / (omega_d Ts) (eq. 2)."""
     omega_n, zeta, omega_d = damped_mode(omega_n, zeta)
-    h, ts = _cosine_base("hanning", omega_d, ts, adjust_ts)
+    h, ts = cosine_base("hanning", omega_d, ts, adjust_ts)
     return _shape(h, omega_n, zeta, ts, order)
 
 
 def blackman_filter(omega_n, zeta, ts, order=1, *, adjust_ts=False):
     """Blackman window 0.42 - 0.5 cos(2 pi k/M) + 0.08 cos(4 pi k/M), M = 6 pi / (omega_d Ts) (section 4)."""
     omega_n, zeta, omega_d = damped_mode(omega_n, zeta)
-    h, ts = _cosine_base("blackman", omega_d, ts, adjust_ts)
+    h, ts = cosine_base("blackman", omega_d, ts, adjust_ts)
     return _shape(h, omega_n, zeta, ts, order)
 
 
 def hamming_filter(omega_n, zeta, ts, order=1, *, adjust_ts=False):
     """Hamming window 25/46 - 21/46 cos(2 pi k / M), approximate null, M = 4 pi / (omega_d Ts) (section 5)."""
     omega_n, zeta, omega_d = damped_mode(omega_n, zeta)
-    h, ts = _cosine_base("hamming", omega_d, ts, adjust_ts)
+    h, ts = cosine_base("hamming", omega_d, ts, adjust_ts)
     return _shape(h, omega_n, zeta, ts, order)
 
 
 def _three_hanning_u(m, c):
-    """omega_d Ts for an integer M (section 7; the OCR's left side is cos(omega_d Ts), see shapers.window)."""
+    """omega_d Ts for an integer M (section 7).
+
+    The OCR prints ``omega_d Ts = [2 cos^2(pi/M)(C+1) + 2C cos(pi/M) - 1] / [2C cos(pi/M) + 2C + 1]``;
+    the right side is cos(omega_d Ts) (it is what eq. (6) inverts, and it is the null of the base
+    computed numerically). Written as 2 arcsin(...) because 1 - cos loses digits for large M:
+    1 - cos(omega_d Ts) = 2 (C+1) sin^2(pi/M) / (2C cos(pi/M) + 2C + 1).
+    """
     x = math.cos(math.pi / m)
     return 2.0 * math.asin(math.sin(math.pi / m) * math.sqrt((c + 1.0) / (2.0 * c * x + 2.0 * c + 1.0)))
 

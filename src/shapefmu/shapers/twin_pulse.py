@@ -41,22 +41,18 @@ for the others, each factor peaking at 1.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
-from scipy.optimize import bisect
 
-from shapefmu.runtime.checks import check_count, check_finite, check_omega, check_positive, check_vtol
-from shapefmu.runtime.twin_pulse import LAYOUT
+from shapefmu.runtime import twin_pulse
+from shapefmu.runtime.checks import check_count, check_positive
 from shapefmu.shapers.profile import MotionProfile
 from shapefmu.shapers.sampled import SampledShaper
 
-# Samples per period of omega_n on the default time grid.
-_SAMPLES_PER_PERIOD = 1000
-
 
 @dataclass(frozen=True)
-class TwinPulseProfile:
+class TwinPulseProfile(twin_pulse.TwinPulseTiming):
     """A designed twin-pulse-family move and its sampled profile.
 
     Attributes
@@ -77,27 +73,18 @@ class TwinPulseProfile:
     profile : MotionProfile
         Exact v, p at t[k] = k ts, mean a over each sample period; its kernel is TP * BC
         integrated over each sample period.
+    duration : float
+        Length of the whole move, t_tp + t_bc + t_tz, s.
+
+    The timing fields are those of ``shapefmu.runtime.twin_pulse.TwinPulseTiming``, declared once.
     """
 
-    kind: str
-    omega_n: float
-    delta_omega: float
-    null: int
-    slew_speed: float
-    t_tp: float
-    t_bc: float
-    t_tz: float
-    trapezoid_aligned: bool
     profile: MotionProfile
 
     @property
     def kernel_length(self) -> float:
         """Length of TP * BC (eq. 4, 7, 8); add t_tz for the whole move (eq. 12, 15, 16, 20, 21)."""
         return self.t_tp + self.t_bc
-
-    @property
-    def duration(self) -> float:
-        return self.kernel_length + self.t_tz
 
     def spectrum(self, omega) -> np.ndarray:
         """Acceleration spectrum per unit slew speed, TP(w) BC(w) TZ(w), exact and vectorised."""
@@ -133,46 +120,33 @@ def _tz(w, t_tz):
     return 1.0 - np.exp(-1j * w * t_tz)
 
 
-# --- shared guards ---------------------------------------------------------------------------
+# --- the design: the runtime's, sampled here -------------------------------------------------
 
 
-def _move(omega_n, distance, speed):
-    return check_omega(omega_n, "omega_n"), check_positive(distance, "distance"), check_positive(speed, "speed")
+def _design(kind, omega_n, distance, speed, delta_omega, attenuation, ts, tp_null=None, pulse_width=None):
+    """The runtime's design of ``kind`` (what a ProfileGenerator FMU plays) with its sampled profile.
+
+    ``shapefmu.runtime.twin_pulse`` validates the parameters, places the nulls (eq. 2-4, 7-8,
+    11-17, 20-21), finds delta_omega for an ``attenuation`` (section III-C, scan and bisection;
+    see its ``_offset_for``) and integrates the kernel TP * BC over each sample period.
+    """
+    move = twin_pulse.twin_pulse_profile(
+        kind, omega_n, distance, speed, delta_omega=delta_omega, attenuation=attenuation, ts=ts, null=tp_null,
+        pulse_width=pulse_width,
+    )
+    profile = _sample(move.t_tp, move.t_bc, move.t_tz, move.slew_speed, move.ts, move.kernel)
+    timing = {field.name: getattr(move, field.name) for field in fields(twin_pulse.TwinPulseTiming)}
+    return TwinPulseProfile(**timing, profile=profile)
 
 
-def _offset(delta_omega, omega_n):
-    delta_omega = check_finite(delta_omega, "delta_omega")
-    if not 0.0 <= delta_omega < omega_n:
-        raise ValueError(f"delta_omega must be in [0, omega_n) = [0, {omega_n:g}) rad/s, got {delta_omega!r}")
-    return delta_omega
+def _sample(t_tp, t_bc, t_tz, slew, ts, kernel):
+    """Exact a, v, p of v_slew (TP * BC * TZ)(t) on t = k ts, with the runtime's sampled ``kernel``.
 
-
-def _null_index(distance, speed, omega_tz):
-    """k = ceil(d omega_TZ / (2 pi v)) (eq. 13, 17): the slowest aligned trapezoid not above v."""
-    ratio = distance * omega_tz / (2.0 * math.pi * speed)
-    # A ratio within rounding of an integer is that integer, not the next one.
-    return max(1, math.ceil(ratio - 1e-12 * ratio))
-
-
-# LAYOUT, the runtime's table (one for both layers), gives per kind the (twin pulse, boxcar,
-# trapezoid) null at omega_n + s delta_omega, s in {-1, 0, +1}, or None if absent / not aligned.
-_MISALIGNED = tuple(kind for kind in LAYOUT if kind.startswith("M-"))
-
-
-def _times(kind, omega_n, distance, speed, delta_omega, tp_null, pulse_width):
-    """(t_TP, t_BC, t_TZ, k, aligned) for a kind (eq. 2-4, 7-8, 11-17, 20-21)."""
-    s_tp, s_bc, s_tz = LAYOUT[kind]
-    t_tp = 0.0 if s_tp is None else (2 * tp_null - 1) * math.pi / (omega_n + s_tp * delta_omega)
-    t_bc = pulse_width if s_bc is None else 2.0 * math.pi / (omega_n + s_bc * delta_omega)
-    if s_tz is None:
-        return t_tp, t_bc, distance / speed, (tp_null if kind == "TP:BC" else 0), False
-    omega_tz = omega_n + s_tz * delta_omega
-    k = _null_index(distance, speed, omega_tz)
-    return t_tp, t_bc, 2.0 * math.pi * k / omega_tz, k, True
-
-
-def _sample(t_tp, t_bc, t_tz, slew, ts):
-    """Exact a, v, p of v_slew (TP * BC * TZ)(t) on t = k ts, and the kernel TP * BC per sample."""
+    Closed form, vectorised: the move is four boxcars of width t_BC starting at 0, t_TP, t_TZ and
+    t_TZ + t_TP with weights +-v_slew / 2, so v and p are sums of clipped ramps. (The runtime plays
+    the same move as a ``motion.PiecewiseAcceleration``; tests/test_runtime_profiles.py checks both
+    agree.) The velocity after the move is exactly 0.
+    """
     starts = np.array([0.0, t_tp, t_tz, t_tz + t_tp])
     weights = np.array([0.5, 0.5, -0.5, -0.5]) * slew
     n = math.ceil((t_tp + t_bc + t_tz) / ts) + 1
@@ -183,58 +157,7 @@ def _sample(t_tp, t_bc, t_tz, slew, ts):
     a = np.append(np.diff(v) / ts, 0.0)
     # Position of a unit-area boxcar ramp: s^2 / (2 t_BC) while on, then s - t_BC / 2.
     p = np.where(s <= 0.0, 0.0, np.where(s < t_bc, s * s / (2.0 * t_bc), s - t_bc / 2.0)) @ weights
-    # TP * BC integrated over each sample period: a unit-area sequence at the profile's ts.
-    ramp = np.clip(np.arange(math.ceil((t_tp + t_bc) / ts) + 1)[:, None] * ts - starts[:2], 0.0, t_bc) / t_bc
-    kernel = np.diff(ramp @ np.array([0.5, 0.5]))
     return MotionProfile(t, a, v, p, SampledShaper(kernel, ts))
-
-
-def _design(kind, omega_n, distance, speed, delta_omega, attenuation, ts, tp_null=1, pulse_width=None):
-    omega_n, distance, speed = _move(omega_n, distance, speed)
-    ts = (2.0 * math.pi / omega_n) / _SAMPLES_PER_PERIOD if ts is None else check_positive(ts, "ts")
-    pulse_width = ts if pulse_width is None else check_positive(pulse_width, "pulse_width")
-    if kind in _MISALIGNED:
-        if (delta_omega is None) == (attenuation is None):
-            raise ValueError(
-                f"{kind} needs exactly one of delta_omega or attenuation, got {delta_omega!r} and {attenuation!r}"
-            )
-        if delta_omega is None:
-            delta_omega = _offset_for(kind, omega_n, distance, speed, check_vtol(attenuation, "attenuation"), tp_null)
-        delta_omega = _offset(delta_omega, omega_n)
-    else:
-        delta_omega = 0.0
-    t_tp, t_bc, t_tz, k, aligned = _times(kind, omega_n, distance, speed, delta_omega, tp_null, pulse_width)
-    slew = distance / t_tz
-    profile = _sample(t_tp, t_bc, t_tz, slew, ts)
-    return TwinPulseProfile(kind, omega_n, delta_omega, k, slew, t_tp, t_bc, t_tz, aligned, profile)
-
-
-def _offset_for(kind, omega_n, distance, speed, attenuation, tp_null):
-    """delta_omega whose magnitude at omega_n equals ``attenuation`` (section III-C, bisection).
-
-    The magnitude is that of the two mis-aligned components: |TP BC| (eq. 5-6), or |BC TZ| / 2
-    when the trapezoid is one of them (eq. 18-19). In the triple profiles the trapezoid's null sits
-    on omega_n, so the whole spectrum vanishes there whatever delta_omega; their offset is set by
-    the TP:BC pair, the part the paper says acts alone while the load accelerates (section III-G).
-    The magnitude is 0 at delta_omega = 0 and grows with it; a scan finds the first delta_omega
-    where it exceeds the request, and bisection refines that crossing: the widest notch whose
-    centre still meets the attenuation.
-    """
-    trapezoid_misaligned = bool(LAYOUT[kind][2])  # +1 / -1; 0 (centred) and None are excluded
-
-    def excess(dw):
-        t_tp, t_bc, t_tz, _, _ = _times(kind, omega_n, distance, speed, dw, tp_null, 0.0)
-        m = abs(_tp(omega_n, t_tp) * _bc(omega_n, t_bc))
-        return (m * abs(_tz(omega_n, t_tz)) / 2.0 if trapezoid_misaligned else m) - attenuation
-
-    grid = omega_n * np.linspace(0.0, 0.5, 501)
-    for lo, hi in zip(grid[:-1], grid[1:]):
-        if excess(hi) > 0.0:
-            return bisect(excess, lo, hi, xtol=1e-14 * omega_n)
-    raise ValueError(
-        f"attenuation = {attenuation!r} is met for every delta_omega up to omega_n / 2 = {omega_n / 2:g} rad/s; "
-        f"pass delta_omega directly"
-    )
 
 
 # --- designs: one function per profile, signature (omega_n, distance, speed, *, ...) -----------

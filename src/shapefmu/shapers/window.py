@@ -20,74 +20,31 @@ reported as the shaper's ``ts``. M is never rounded silently.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
-from shapefmu.runtime.checks import check_count, check_finite
-from shapefmu.runtime.window_filters import damped_mode, window_length
+from shapefmu.runtime import window_filters
+from shapefmu.runtime.checks import check_count
+from shapefmu.runtime.window_filters import cosine_base, damped_mode
 from shapefmu.shapers.sampled import SampledShaper
 
-# --- shared steps (the design point and window length are the runtime's, so the FMU agrees) ---
+# --- the shared step: the runtime's order-1 filter, raised to order n ----------------------------
 
 
-def _shape(h, omega_n, zeta, ts, order):
-    """Damping compensation and normalisation (paper 000, section 3), then order n by eq. (1)."""
+def _sampled(design, order):
+    """An order-1 filter ``(taps, ts)`` of ``shapefmu.runtime.window_filters``, to order n by eq. (1).
+
+    The runtime (what a ShapeFilter FMU runs) validates the parameters, builds the base window,
+    finds the integer M for ts, compensates the damping and normalises (section 3). The n-fold
+    self-convolution of eq. (1) is O(n M^2): numpy's here, the same sums as the runtime's
+    pure-Python convolution to rounding, at a hundredth of the time.
+    """
+    taps, ts = design
     order = check_count(order, "order", 1)
-    k = np.arange(h.size)
-    f = h * np.exp(-zeta * omega_n * k * ts)
-    f = f / f.sum()
+    f = np.array(taps, dtype=float)
     out = f
     for _ in range(order - 1):
         out = np.convolve(out, f)
     return SampledShaper(out, ts)
-
-
-def _cosine_window(m, coefficients):
-    """sum_i c_i cos(2 pi i k / M), k = 0..M (eq. 2 and the Blackman/Hamming forms)."""
-    k = np.arange(m + 1)
-    return sum(c * np.cos(2.0 * math.pi * i * k / m) for i, c in enumerate(coefficients))
-
-
-# Base windows of paper 000: (coefficients of cos(2 pi i k/M), null at omega_d Ts = 2 pi m0 / M,
-# smallest M). The null of a generalised cosine window of M + 1 samples whose end samples are zero
-# sits on every DFT bin 2 pi m / M with m beyond its last cosine term; m0 is the first of them.
-_COSINE_WINDOWS = {
-    "hanning": ((0.5, -0.5), 2, 4),  # eq. (2): M = 4 pi / (omega_d Ts)
-    "blackman": ((0.42, -0.5, 0.08), 3, 6),  # section 4: M = 6 pi / (omega_d Ts)
-    "hamming": ((25.0 / 46.0, -21.0 / 46.0), 2, 4),  # section 5: approximate null only
-}
-
-
-def _cosine_base(name, omega_d, ts, adjust_ts):
-    coefficients, m0, minimum = _COSINE_WINDOWS[name]
-    m, ts = window_length(
-        omega_d,
-        ts,
-        adjust_ts,
-        lambda u: 2.0 * math.pi * m0 / u,
-        lambda m: 2.0 * math.pi * m0 / m,
-        minimum,
-        f"{2 * m0}*pi/(omega_d*ts)",
-    )
-    return _cosine_window(m, coefficients), ts
-
-
-def _base(base, omega_d, ts, adjust_ts):
-    """A symmetric base g[k] with G(omega_d Ts) = 0, for the non-symmetric constructions (section 8)."""
-    if base == "rectangle":
-        m, ts = _rectangle_length(omega_d, ts, adjust_ts)
-        return np.ones(m), ts
-    if base in ("hanning", "blackman"):
-        return _cosine_base(base, omega_d, ts, adjust_ts)
-    raise ValueError(f"base must be one of 'rectangle', 'hanning', 'blackman', got {base!r}")
-
-
-def _rectangle_length(omega_d, ts, adjust_ts):
-    # M equal samples k = 0..M-1 null every bin 2 pi m / M, m >= 1 (Zhou & Misawa 2005a).
-    return window_length(
-        omega_d, ts, adjust_ts, lambda u: 2.0 * math.pi / u, lambda m: 2.0 * math.pi / m, 2, "2*pi/(omega_d*ts)"
-    )
 
 
 # --- designs ---------------------------------------------------------------------------------
@@ -131,9 +88,7 @@ def rectangle_filter(omega_n, zeta, ts, order=1, *, adjust_ts=False) -> SampledS
     >>> rectangle_filter(1.0, 0.0, math.pi / 100).taps.size
     200
     """
-    omega_n, zeta, omega_d = damped_mode(omega_n, zeta)
-    m, ts = _rectangle_length(omega_d, ts, adjust_ts)
-    return _shape(np.ones(m), omega_n, zeta, ts, order)
+    return _sampled(window_filters.rectangle_filter(omega_n, zeta, ts, adjust_ts=adjust_ts), order)
 
 
 def hanning_filter(omega_n, zeta, ts, order=1, *, adjust_ts=False) -> SampledShaper:
@@ -156,9 +111,7 @@ def hanning_filter(omega_n, zeta, ts, order=1, *, adjust_ts=False) -> SampledSha
     >>> hanning_filter(1.0, 0.0, math.pi / 100).taps.size  # M + 1 with M = 400
     401
     """
-    omega_n, zeta, omega_d = damped_mode(omega_n, zeta)
-    h, ts = _cosine_base("hanning", omega_d, ts, adjust_ts)
-    return _shape(h, omega_n, zeta, ts, order)
+    return _sampled(window_filters.hanning_filter(omega_n, zeta, ts, adjust_ts=adjust_ts), order)
 
 
 def blackman_filter(omega_n, zeta, ts, order=1, *, adjust_ts=False) -> SampledShaper:
@@ -176,9 +129,7 @@ def blackman_filter(omega_n, zeta, ts, order=1, *, adjust_ts=False) -> SampledSh
     ----------
     Paper 000, section 4.
     """
-    omega_n, zeta, omega_d = damped_mode(omega_n, zeta)
-    h, ts = _cosine_base("blackman", omega_d, ts, adjust_ts)
-    return _shape(h, omega_n, zeta, ts, order)
+    return _sampled(window_filters.blackman_filter(omega_n, zeta, ts, adjust_ts=adjust_ts), order)
 
 
 def hamming_filter(omega_n, zeta, ts, order=1, *, adjust_ts=False) -> SampledShaper:
@@ -197,9 +148,7 @@ def hamming_filter(omega_n, zeta, ts, order=1, *, adjust_ts=False) -> SampledSha
     ----------
     Paper 000, section 5.
     """
-    omega_n, zeta, omega_d = damped_mode(omega_n, zeta)
-    h, ts = _cosine_base("hamming", omega_d, ts, adjust_ts)
-    return _shape(h, omega_n, zeta, ts, order)
+    return _sampled(window_filters.hamming_filter(omega_n, zeta, ts, adjust_ts=adjust_ts), order)
 
 
 def hamming_null_depth(omega_n, zeta, ts, *, adjust_ts=False) -> float:
@@ -209,28 +158,10 @@ def hamming_null_depth(omega_n, zeta, ts, *, adjust_ts=False) -> float:
     residual vibration of the order-1 Hamming filter at the design point.
     """
     _, _, omega_d = damped_mode(omega_n, zeta)
-    h, ts = _cosine_base("hamming", omega_d, ts, adjust_ts)
+    h, ts = cosine_base("hamming", omega_d, ts, adjust_ts)
+    h = np.array(h)
     k = np.arange(h.size)
     return float(abs(np.sum(h * np.exp(-1j * omega_d * ts * k))) / h.sum())
-
-
-def _three_hanning_u(m, c):
-    """omega_d Ts for an integer M (section 7).
-
-    The OCR prints ``omega_d Ts = [2 cos^2(pi/M)(C+1) + 2C cos(pi/M) - 1] / [2C cos(pi/M) + 2C + 1]``;
-    the right side is cos(omega_d Ts) (it is what eq. (6) inverts, and it is the null of the base
-    computed numerically). Written as 2 arcsin(...) because 1 - cos loses digits for large M:
-    1 - cos(omega_d Ts) = 2 (C+1) sin^2(pi/M) / (2C cos(pi/M) + 2C + 1).
-    """
-    x = math.cos(math.pi / m)
-    return 2.0 * math.asin(math.sin(math.pi / m) * math.sqrt((c + 1.0) / (2.0 * c * x + 2.0 * c + 1.0)))
-
-
-def _three_hanning_m(u, c):
-    """Eq. (6): M = pi / arccos[(C cos u - C + sqrt(B)) / (2C + 2)], u = omega_d Ts."""
-    y = math.cos(u)
-    b = c * c * y * y + 2 * c * c * y + c * c + 2 * c + 6 * c * y + 2 + 2 * y
-    return math.pi / math.acos(min(1.0, (c * y - c + math.sqrt(b)) / (2 * c + 2)))
 
 
 def three_hanning_filter(omega_n, zeta, ts, order=1, *, c=0.25, adjust_ts=False) -> SampledShaper:
@@ -245,29 +176,15 @@ def three_hanning_filter(omega_n, zeta, ts, order=1, *, c=0.25, adjust_ts=False)
     -----
     h = h_s1 + h_s2 + h_s3 on 0 <= k <= 2M: one Hanning of length 2M and C times two Hanning windows
     of length M placed end to end, i.e. h[k] = 1/2 - 1/2 cos(pi k / M) + C [1/2 - 1/2 cos(2 pi k / M)].
-    Its null lies between DFT bins and M follows from eq. (6); see ``_three_hanning_u`` for the
-    corrected forward relation.
+    Its null lies between DFT bins and M follows from eq. (6); see
+    ``shapefmu.runtime.window_filters._three_hanning_u`` for the corrected forward relation.
 
     References
     ----------
     Paper 000, section 7, eq. (6).
     """
-    omega_n, zeta, omega_d = damped_mode(omega_n, zeta)
-    c = check_finite(c, "c")
-    if c < 0.0:
-        raise ValueError(f"c must be >= 0, got {c!r}")
-    m, ts = window_length(
-        omega_d,
-        ts,
-        adjust_ts,
-        lambda u: _three_hanning_m(u, c),
-        lambda m: _three_hanning_u(m, c),
-        2,
-        "eq. (6) of paper 000",
-    )
-    k = np.arange(2 * m + 1)
-    h = 0.5 - 0.5 * np.cos(math.pi * k / m) + c * (0.5 - 0.5 * np.cos(2.0 * math.pi * k / m))
-    return _shape(h, omega_n, zeta, ts, order)
+    design = window_filters.three_hanning_filter(omega_n, zeta, ts, c=c, adjust_ts=adjust_ts)
+    return _sampled(design, order)
 
 
 def differenced_filter(
@@ -292,13 +209,8 @@ def differenced_filter(
     ----------
     Paper 000, section 8.1, Figs. 8-9.
     """
-    omega_n, zeta, omega_d = damped_mode(omega_n, zeta)
-    k1, k2 = check_finite(k1, "k1"), check_finite(k2, "k2")
-    g, ts = _base(base, omega_d, ts, adjust_ts)
-    padded = np.append(g, 0.0)
-    h = k1 * padded + k2 * np.diff(padded, prepend=0.0)
-    _check_gain(h, "k1")
-    return _shape(h, omega_n, zeta, ts, order)
+    design = window_filters.differenced_filter(omega_n, zeta, ts, k1=k1, k2=k2, base=base, adjust_ts=adjust_ts)
+    return _sampled(design, order)
 
 
 def convolved_filter(
@@ -324,33 +236,12 @@ def convolved_filter(
     ----------
     Paper 000, section 8.2, Figs. 10-11.
     """
-    omega_n, zeta, omega_d = damped_mode(omega_n, zeta)
-    k1, k2 = check_finite(k1, "k1"), check_finite(k2, "k2")
-    g, ts = _base(base, omega_d, ts, adjust_ts)
-    gg = np.convolve(g, g)
-    m = g.size - 1
-    k0 = m if k0 is None else check_count(k0, "k0", 0)
-    if k0 > gg.size - g.size:
-        raise ValueError(f"k0 must be an integer in [0, {gg.size - g.size}], got {k0!r}")
-    h = k2 * gg
-    h[k0 : k0 + g.size] += k1 * g
-    _check_gain(h, "k1")
-    return _shape(h, omega_n, zeta, ts, order)
+    design = window_filters.convolved_filter(
+        omega_n, zeta, ts, k1=k1, k2=k2, k0=k0, base=base, adjust_ts=adjust_ts
+    )
+    return _sampled(design, order)
 
 
-def _check_gain(h, name):
-    # The filter is normalised by the sum of its samples, which the weights can cancel.
-    if abs(h.sum()) <= 1e-9 * np.abs(h).sum():
-        raise ValueError(f"{name} and k2 make the base sum to 0; the filter cannot be normalised")
-
-
-#: Design functions by kind, for the command line (``shapefmu design KIND``).
-WINDOW_FILTERS = {
-    "rectangle": rectangle_filter,
-    "hanning": hanning_filter,
-    "blackman": blackman_filter,
-    "hamming": hamming_filter,
-    "three-hanning": three_hanning_filter,
-    "differenced": differenced_filter,
-    "convolved": convolved_filter,
-}
+#: Design functions by kind, for the command line (``shapefmu design KIND``): the kinds of the
+#: runtime's table (what the ShapeFilter FMU's ``kind`` selects), each with its namesake here.
+WINDOW_FILTERS = {kind: globals()[runtime.__name__] for kind, runtime in window_filters.WINDOW_FILTERS.items()}
