@@ -64,22 +64,6 @@ SOURCES = {
                 self.integral += self.u * step_size
                 return True
     """,
-    # Same as CosimGain, built without FMU-state support.
-    "CosimGainNoState": """
-        class CosimGainNoState(Fmi2Slave):
-            def __init__(self, **kwargs):
-                super().__init__(**kwargs)
-                self.k = 1.0
-                self.c = 0.0
-                self.u = 0.0
-                self.register_variable(Real("k", causality=Fmi2Causality.parameter, variability=Fmi2Variability.tunable))
-                self.register_variable(Real("c", causality=Fmi2Causality.parameter, variability=Fmi2Variability.tunable))
-                self.register_variable(Real("u", causality=Fmi2Causality.input))
-                self.register_variable(Real("y", causality=Fmi2Causality.output, getter=lambda: self.k * self.u + self.c))
-
-            def do_step(self, current_time, step_size):
-                return True
-    """,
     # Returns fmi2Error from doStep once t reaches fail_at.
     "CosimFailing": """
         class CosimFailing(Fmi2Slave):
@@ -95,6 +79,9 @@ SOURCES = {
                 return current_time + step_size < self.fail_at
     """,
 }
+
+# Same as CosimGain, built without FMU-state support.
+SOURCES["CosimGainNoState"] = SOURCES["CosimGain"].replace("CosimGain", "CosimGainNoState")
 
 _HEADER = (
     "from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability, Real\n"
