@@ -4,8 +4,6 @@ Each ``run_*`` sets ``u`` to ``commands[k]`` at the k-th communication point, ta
 ``h`` and reads ``y``: the sequence of outputs at the end of each step.
 """
 
-from pathlib import Path
-
 
 def variable_references(path):
     from fmpy import read_model_description
@@ -68,51 +66,24 @@ def refused_initialisation(path, parameters):
     return failure.value
 
 
+def _u_to_y(run, path, commands, h):
+    """``run`` (a ``fmu_signal_drivers.run_*``) with input ``u`` = ``commands[k]``, reading ``y``."""
+    return [row[0] for row in run(path, [{"u": u} for u in commands], h, ["y"])]
+
+
 def run_fmpy(path, commands, h):
-    slave, vr = initialised(path)
-    outputs = []
-    for k, u in enumerate(commands):
-        slave.setReal([vr["u"]], [u])
-        slave.doStep(k * h, h)
-        outputs.append(slave.getReal([vr["y"]])[0])
-    slave.terminate()
-    slave.freeInstance()
-    return outputs
+    import fmu_signal_drivers
+
+    return _u_to_y(fmu_signal_drivers.run_fmpy, path, commands, h)
 
 
 def run_libcosim(path, commands, h):
-    from libcosimpy.CosimExecution import CosimExecution
-    from libcosimpy.CosimManipulator import CosimManipulator
-    from libcosimpy.CosimObserver import CosimObserver
-    from libcosimpy.CosimSlave import CosimLocalSlave
+    import fmu_signal_drivers
 
-    execution = CosimExecution.from_step_size(step_size=round(h * 1e9))  # libcosim counts nanoseconds
-    index = execution.add_local_slave(CosimLocalSlave(fmu_path=str(Path(path)), instance_name="instance"))
-    vr = {v.name.decode(): v.reference for v in execution.slave_variables(index)}
-    override = CosimManipulator.create_override()
-    execution.add_manipulator(override)
-    observer = CosimObserver.create_last_value()
-    execution.add_observer(observer)
-    outputs = []
-    for u in commands:
-        override.slave_real_values(index, [vr["u"]], [u])
-        execution.step()
-        outputs.append(observer.last_real_values(index, [vr["y"]])[0])
-    return outputs
+    return _u_to_y(fmu_signal_drivers.run_libcosim, path, commands, h)
 
 
 def run_ecos(path, commands, h):
-    from ecospy.EcosSimulation import EcosSimulation
-    from ecospy.EcosSimulationStructure import EcosSimulationStructure
+    import fmu_signal_drivers
 
-    outputs = []
-    with EcosSimulationStructure() as structure:
-        structure.add_model("instance", str(Path(path)))
-        with EcosSimulation(structure=structure, step_size=h) as simulation:
-            simulation.init()
-            for u in commands:
-                simulation.set_real("instance::u", u)
-                simulation.step(1)
-                outputs.append(simulation.get_real("instance::y"))
-            simulation.terminate()
-    return outputs
+    return _u_to_y(fmu_signal_drivers.run_ecos, path, commands, h)
