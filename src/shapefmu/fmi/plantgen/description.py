@@ -50,8 +50,10 @@ def model_description(part: ModelPart, guid: str, source_files: tuple[str, ...] 
                          canNotUseMemoryManagementFunctions="false")
     units = sorted({s.unit for s in (*part.states, *part.inputs, *part.outputs) if s.unit}
                    | {p.unit for p in part.parameters if p.unit})
-    variables = ['    <ScalarVariable name="time" valueReference="0" causality="independent" variability="continuous">'
-                 '<Real/></ScalarVariable>']
+    # Time is the implicit independent variable (FMI 2.0, section 2.2.7), not listed: FMI Library,
+    # which libcosim reads model descriptions with, logs an error for a listed one without a start
+    # value, which is the only form the standard allows. The wrapper keeps value reference 0 for it.
+    variables = []
     vr = 1
     for state in part.states:
         variables.append(
@@ -63,7 +65,7 @@ def model_description(part: ModelPart, guid: str, source_files: tuple[str, ...] 
         variables.append(
             f"    <ScalarVariable{_attributes(name=f'der(state.{state.name})', valueReference=vr)}"
             f' causality="local" variability="continuous" initial="calculated">'
-            f"<Real{_attributes(derivative=i + 2)}/></ScalarVariable>")
+            f"<Real{_attributes(derivative=i + 1)}/></ScalarVariable>")
         vr += 1
     for signal in part.inputs:
         variables.append(
@@ -85,15 +87,15 @@ def model_description(part: ModelPart, guid: str, source_files: tuple[str, ...] 
             f"<Real{_attributes(start=_real(parameter.value), unit=parameter.unit)}/></ScalarVariable>")
         vr += 1
 
-    # ModelStructure indices are 1-based positions in ModelVariables = value reference + 1.
-    known_index = [2 + i for i in range(nx)] + [2 + 2 * nx + j for j in range(nu)]
+    # ModelStructure indices are 1-based positions in ModelVariables = value reference.
+    known_index = [1 + i for i in range(nx)] + [1 + 2 * nx + j for j in range(nu)]
     derivative_dependencies, output_dependencies = part.dependencies()
 
     def unknown(index: int, dependencies: list[int]) -> str:
         return f'      <Unknown index="{index}" dependencies="{" ".join(str(known_index[d]) for d in dependencies)}"/>'
 
-    output_index = [2 + 2 * nx + nu + k for k in range(ny)]
-    derivative_index = [2 + nx + i for i in range(nx)]
+    output_index = [1 + 2 * nx + nu + k for k in range(ny)]
+    derivative_index = [1 + nx + i for i in range(nx)]
     outputs = [unknown(output_index[k], deps) for k, deps in enumerate(output_dependencies)]
     derivatives = [unknown(derivative_index[i], deps) for i, deps in enumerate(derivative_dependencies)]
     initial = [f'      <Unknown index="{index}"/>' for index in sorted(output_index + derivative_index)]
