@@ -14,6 +14,7 @@ import pytest
 from shapefmu.cosim.compare import compare, move_metrics
 from shapefmu.optimal import compare_moves
 from shapefmu.plants import load
+from shapefmu.shapers import zvd
 from shapefmu.stos import simulate_stos, stos_law
 
 MODEL = Path(__file__).resolve().parent.parent / "models" / "disk_drive.toml"
@@ -29,7 +30,7 @@ def cache(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def runs(cache):
-    return compare(MODEL, X, candidates=(*OPEN_LOOP, "stos-convolution", "stos-simultaneous"), step=H, cache=cache)
+    return compare(MODEL, X, candidates=(*OPEN_LOOP, "stos-convolution", "stos-simultaneous", "ekf-tuned"), step=H, cache=cache)
 
 
 @pytest.fixture(scope="module")
@@ -99,6 +100,24 @@ def test_stos_row_is_the_design_layers_sampled_loop_measured_the_same_way(runs, 
 
 def test_simultaneous_stos_is_faster_than_convolution_stos(runs):
     assert runs.run("stos-simultaneous").metrics.move_time < runs.run("stos-convolution").metrics.move_time
+
+
+def test_ekf_tuned_row_is_the_bang_bang_shaped_by_zvd_for_the_estimate_it_converged_to(runs):
+    # The tuner designs a ZVD for its estimate when the EKF first converges (it re-designs only for a
+    # change beyond 5 %) and switches it in while the command rests before the second move; the
+    # design layer shapes the same bang-bang with that ZVD and simulates it exactly.
+    run = runs.run("ekf-tuned")
+    first = np.flatnonzero(run.results["tuner.converged"] == 1.0)[0]
+    assert run.results["time"][first] < run.start
+    omega, zeta = run.results["tuner.omega_est"][first], run.results["tuner.zeta_est"][first]
+    # The mode it watched, within 2 % (it started 10 % low; paper 001 asks 1 % after five periods,
+    # and the tuner converges on its own tolerances sooner).
+    assert omega == pytest.approx(2 * np.pi * 2000.0, rel=2e-2)
+    (move,) = [m for m in compare_moves(load(MODEL), X, U, {"ekf": zvd(omega, zeta)}).moves if m.name.endswith("ekf")]
+    # The tuner's output changes only in doStep (no feed-through): the plant gets it one step late.
+    assert move.duration + H <= run.metrics.move_time < move.duration + 2 * H * (1 + 1e-9)
+    allowed = sampling_bound(move.command) + 7e-5 * move.residual
+    assert run.metrics.residual == pytest.approx(move.residual, rel=0, abs=allowed)
 
 
 def test_cli_compare_prints_the_table_and_writes_the_plot(cache, tmp_path, capsys):

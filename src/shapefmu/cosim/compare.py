@@ -197,8 +197,9 @@ def move_metrics(t, u, position, deflections, distance: float, u_max: float, win
 class CandidateRun:
     """One candidate: its metrics, the ratio of its move time to the time-optimal one, the recorded
     run (``results``, a structured array with the time, the plant's input as the plant held it over
-    the step just taken, ``Comparison.command``, and the plant's outputs), and
-    when the measured move starts (``start``; the EKF-tuned move follows its identification move)."""
+    the step just taken, ``Comparison.command``, and the plant's outputs; the EKF-tuned run also
+    ``tuner.omega_est``, ``tuner.zeta_est`` and ``tuner.converged``), and when the measured move
+    starts (``start``; the EKF-tuned move follows its identification move)."""
 
     name: str
     metrics: MoveMetrics
@@ -303,13 +304,13 @@ def compare(plant_model, distance: float, candidates=CANDIDATES, step: float = 1
     def system(name):
         return System(name.replace("-", "_")).add("plant", plant_fmu)
 
-    def run_system(sys_, start=0.0):
-        with Master(sys_, step, record=[command, *outputs]) as master:
+    def run_system(sys_, start=0.0, extra=()):
+        with Master(sys_, step, record=[command, *outputs, *extra]) as master:
             return master.run(start + stop_time)
 
     runs = []
     for name in candidates:
-        start = 0.0
+        start, extra = 0.0, ()
         if name in ("bang-bang", "time-optimal"):
             table = _signal_table(rigid if name == "bang-bang" else optimal.command)
             sys_ = system(name).add("player", player, {"table": table}).connect("player.y_mean", command)
@@ -320,15 +321,16 @@ def compare(plant_model, distance: float, candidates=CANDIDATES, step: float = 1
                     .connect("player.y_mean", "shaper.u").connect("shaper.y", command))
         elif name.startswith("stos-"):
             sys_ = stos_system(plant, distance, step, fmus, u_max, shaper=name.removeprefix("stos-"))
-        else:  # ekf-tuned
-            sys_, start = _ekf_tuned_system(system(name), fmus, rigid, distance, window, step, modes, command)
-        results = run_system(sys_, start)
+        else:  # ekf-tuned; its estimate is recorded, so the design it shaped with can be checked
+            start, both = _ekf_tuned_moves(rigid, window, step)
+            sys_ = _ekf_tuned_system(system(name), fmus, both, distance, step, modes, command)
+            extra = ("tuner.omega_est", "tuner.zeta_est", "tuner.converged")
+        results = run_system(sys_, start, extra)
         if start > 0.0:
             # The plant is linear: remove what is left of the identification move's ring-down
-            # (that move alone, unshaped, as the tuner passes it before converging), so that the
-            # measured move is judged by its own vibration.
-            alone = (system("identification").add("player", player, {"table": _signal_table(rigid)})
-                     .connect("player.y_mean", command))
+            # (that move alone through the same tuner, which passes it unshaped and one step late
+            # before it converges), so that the measured move is judged by its own vibration.
+            alone = _ekf_tuned_system(system("identification"), fmus, rigid, distance, step, modes, command)
             first = run_system(alone, start)
             for output in outputs:
                 results[output] -= first[output]
@@ -376,23 +378,26 @@ def stos_system(plant, distance: float, Ts: float, fmus: FMUCache, u_max: float 
             .connect("controller.u", f"plant.{plant.inputs[0]}"))
 
 
-def _ekf_tuned_system(sys_, fmus, rigid, distance, window, step, modes, command):
-    """Identification move, ring-down while the EKF converges, then the measured (shaped) move.
-
-    The EKF (paper 001) watches deflection_1 from a guess 10 % below the first mode and designs a
-    ZVD shaper for its estimate; the tuner switches the shaper in while the command rests."""
+def _ekf_tuned_moves(rigid, window: float, step: float):
+    """(start, command): the identification move, a rest while the EKF converges, then the measured
+    move, the same bang-bang again from X to 2X, starting at ``start``."""
     from shapefmu.optimal import Command
 
     rest = 10.0 * window  # the EKF converges within about five periods of the ring-down (paper 001)
     start = step * math.ceil((rigid.duration + rest) / step)  # on the grid: the run ends a whole number of steps later
-    # The second move: the same bang-bang again, from X to 2X, starting at ``start``.
-    twice = Command((*rigid.breaks, *(start + b for b in rigid.breaks)), (*rigid.levels, 0.0, *rigid.levels))
+    return start, Command((*rigid.breaks, *(start + b for b in rigid.breaks)), (*rigid.levels, 0.0, *rigid.levels))
+
+
+def _ekf_tuned_system(sys_, fmus, moves, distance, step, modes, command):
+    """A ReferencePlayer playing ``moves`` into an EKFTuner that drives the plant's input.
+
+    The EKF (paper 001) watches deflection_1 from a guess 10 % below the first mode and designs a
+    ZVD shaper for its estimate; the tuner switches the shaper in while the command rests."""
     tuner = {"kind": "zvd", "Ts": step, "omega0": 0.9 * 2.0 * math.pi * modes["f[1]"], "amplitude": 1e-2 * distance}
-    sys_ = (sys_.add("player", fmus.slave("ReferencePlayer"), {"table": _signal_table(twice)})
+    return (sys_.add("player", fmus.slave("ReferencePlayer"), {"table": _signal_table(moves)})
             .add("tuner", fmus.slave("EKFTuner"), tuner)
             .connect("player.y_mean", "tuner.u").connect("plant.deflection_1", "tuner.vibration")
             .connect("tuner.y", command))
-    return sys_, start
 
 
 def plot_compare(comparison: Comparison, path) -> Path:
