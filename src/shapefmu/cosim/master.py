@@ -358,6 +358,7 @@ class Master:
         buf = np.empty(rows, dtype=[("time", "f8")] + [(name, "f8") for name in self.record])
         self._buf, self._row = buf, 0
         t = t0
+        bar = None
         try:
             self._initialize(t0, grouped)
             buf[0] = (t0, *(self._unit[c].out_val[s] for c, s in self._record_sources))
@@ -374,9 +375,13 @@ class Master:
                 bar.close()
         except FMUFailure as failure:
             self._state = "failed"
+            if bar:
+                bar.close()  # the message that follows gets a line of its own
             raise self._error(failure, failure.time if failure.time is not None else t, buf[: self._row].copy()) from None
         except KeyboardInterrupt:
             self._state = "failed"
+            if bar:
+                bar.close()
             raise CosimInterrupted(t, buf[: self._row].copy()) from None
         self._state = "finished"
         return buf
