@@ -87,3 +87,51 @@ def run_ecos(path, commands, h):
     import fmu_signal_drivers
 
     return _u_to_y(fmu_signal_drivers.run_ecos, path, commands, h)
+
+
+def step_u(slave, vr, commands, start, h):
+    """Steps ``start``, ``start + 1``, ... of ``h`` with ``u`` = each command; ``y`` after each."""
+    out = []
+    for k, u in enumerate(commands, start=start):
+        slave.setReal([vr["u"]], [u])
+        slave.doStep(k * h, h)
+        out.append(slave.getReal([vr["y"]])[0])
+    return out
+
+
+def assert_state_restores_exactly(path, commands, h, at):
+    """fmi2GetFMUstate after ``at`` steps, run on, fmi2SetFMUstate, run on again: bit for bit the
+    same outputs, and those of an uninterrupted run; then the same through a serialised state
+    restored in a fresh instance."""
+    slave, vr = initialised(path)
+    step_u(slave, vr, commands[:at], 0, h)
+    state = slave.getFMUState()
+    first = step_u(slave, vr, commands[at:], at, h)
+    slave.setFMUState(state)
+    again = step_u(slave, vr, commands[at:], at, h)
+    raw = slave.serializeFMUState(state)
+    slave.freeFMUState(state)
+    slave.freeInstance()
+    assert again == first
+    assert first == run_fmpy(path, commands, h)[at:]
+    fresh, vr = initialised(path)
+    fresh.setFMUState(fresh.deserializeFMUState(raw))
+    assert step_u(fresh, vr, commands[at:], at, h) == first
+    fresh.freeInstance()
+
+
+def assert_nan_input_fails_that_step_only(path, commands, h, at):
+    """A NaN ``u`` at step ``at``: that fmi2DoStep returns fmi2Error and leaves the state as it was,
+    so the run goes on as if the step had not been asked for."""
+    import pytest
+    from fmpy.fmi1 import FMICallException
+
+    slave, vr = initialised(path)
+    out = step_u(slave, vr, commands[:at], 0, h)
+    slave.setReal([vr["u"]], [float("nan")])
+    with pytest.raises(FMICallException) as failure:
+        slave.doStep(at * h, h)
+    assert failure.value.status == 3
+    out += step_u(slave, vr, commands[at:], at, h)
+    slave.freeInstance()
+    assert out == run_fmpy(path, commands, h)

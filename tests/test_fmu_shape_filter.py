@@ -19,7 +19,15 @@ from fixtures_fmi import (
 )
 from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
-from fmu_drivers import configured, initialised, run_ecos, run_fmpy, run_libcosim
+from fmu_drivers import (
+    assert_nan_input_fails_that_step_only,
+    assert_state_restores_exactly,
+    configured,
+    initialised,
+    run_ecos,
+    run_fmpy,
+    run_libcosim,
+)
 from hosts import run_ecos_program
 
 from shapefmu.runtime import time_frequency as runtime_time_frequency
@@ -59,15 +67,6 @@ def _after_each_step(shaper, commands, u0):
     commands = np.asarray(commands, dtype=float)
     extended = np.concatenate([commands, [commands[-1]]])
     return _offline(shaper, extended, u0)[1:] + shaper.taps[0] * (extended[:-1] - extended[1:])
-
-
-def _steps(slave, vr, commands, start):
-    out = []
-    for k, u in enumerate(commands, start=start):
-        slave.setReal([vr["u"]], [u])
-        slave.doStep(k * H, H)
-        out.append(slave.getReal([vr["y"]])[0])
-    return out
 
 
 def _fixture_design():
@@ -255,31 +254,8 @@ def test_runs_with_only_the_standard_library(shape_filter_fmu, tmp_path):
 # --- state ------------------------------------------------------------------------------------
 
 
-def test_get_and_set_state_restores_the_filter_exactly(shape_filter_fmu):
-    commands = command_signal(500)
-    slave, vr = initialised(shape_filter_fmu)
-    _steps(slave, vr, commands[:250], 0)
-    state = slave.getFMUState()
-    first = _steps(slave, vr, commands[250:], 250)
-    slave.setFMUState(state)
-    again = _steps(slave, vr, commands[250:], 250)
-    slave.freeFMUState(state)
-    slave.freeInstance()
-    assert again == first  # bit for bit
-    assert first == run_fmpy(shape_filter_fmu, commands, H)[250:]
-
-
-def test_serialised_state_restores_in_a_fresh_instance(shape_filter_fmu):
-    commands = command_signal(500)
-    slave, vr = initialised(shape_filter_fmu)
-    _steps(slave, vr, commands[:300], 0)
-    raw = slave.serializeFMUState(slave.getFMUState())
-    expected = _steps(slave, vr, commands[300:], 300)
-    slave.freeInstance()
-    fresh, vr = initialised(shape_filter_fmu)
-    fresh.setFMUState(fresh.deserializeFMUState(raw))
-    assert _steps(fresh, vr, commands[300:], 300) == expected
-    fresh.freeInstance()
+def test_get_and_set_and_serialised_state_restore_exactly(shape_filter_fmu):
+    assert_state_restores_exactly(shape_filter_fmu, command_signal(500), H, at=250)
 
 
 # --- errors -----------------------------------------------------------------------------------
@@ -330,13 +306,4 @@ def test_a_step_that_is_not_a_whole_number_of_samples_is_an_error(shape_filter_f
 
 
 def test_nan_input_fails_that_step_and_leaves_the_state_untouched(shape_filter_fmu):
-    commands = command_signal(300)
-    slave, vr = initialised(shape_filter_fmu)
-    out = _steps(slave, vr, commands[:100], 0)
-    slave.setReal([vr["u"]], [float("nan")])
-    with pytest.raises(FMICallException) as failure:
-        slave.doStep(100 * H, H)
-    assert failure.value.status == 3
-    out += _steps(slave, vr, commands[100:], 100)
-    slave.freeInstance()
-    assert out == run_fmpy(shape_filter_fmu, commands, H)
+    assert_nan_input_fails_that_step_only(shape_filter_fmu, command_signal(300), H, at=100)

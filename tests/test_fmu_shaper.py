@@ -13,7 +13,14 @@ import pytest
 from fixtures_fmi import MULTIMODE_STARTS, SHAPER_STARTS, command_signal
 from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
-from fmu_drivers import initialised, run_ecos, run_fmpy, run_libcosim
+from fmu_drivers import (
+    assert_nan_input_fails_that_step_only,
+    assert_state_restores_exactly,
+    initialised,
+    run_ecos,
+    run_fmpy,
+    run_libcosim,
+)
 
 from shapefmu.shapers import design
 
@@ -98,40 +105,8 @@ def test_outputs_identical_in_fmpy_libcosim_and_ecos(shaper_fmu):
         np.testing.assert_allclose(other, reference, rtol=0, atol=1e-12)
 
 
-def _steps(slave, vr, commands, start):
-    out = []
-    for k, u in enumerate(commands, start=start):
-        slave.setReal([vr["u"]], [u])
-        slave.doStep(k * H, H)
-        out.append(slave.getReal([vr["y"]])[0])
-    return out
-
-
-def test_get_and_set_state_restores_the_ring_buffer_exactly(shaper_fmu):
-    commands = command_signal(120)
-    slave, vr = initialised(shaper_fmu)
-    _steps(slave, vr, commands[:40], 0)
-    state = slave.getFMUState()
-    first = _steps(slave, vr, commands[40:], 40)
-    slave.setFMUState(state)
-    again = _steps(slave, vr, commands[40:], 40)
-    slave.freeFMUState(state)
-    slave.freeInstance()
-    assert again == first  # bit for bit
-    assert first == run_fmpy(shaper_fmu, commands, H)[40:]
-
-
-def test_serialised_state_restores_in_a_fresh_instance(shaper_fmu):
-    commands = command_signal(120)
-    slave, vr = initialised(shaper_fmu)
-    _steps(slave, vr, commands[:70], 0)
-    raw = slave.serializeFMUState(slave.getFMUState())
-    expected = _steps(slave, vr, commands[70:], 70)
-    slave.freeInstance()
-    fresh, vr = initialised(shaper_fmu)
-    fresh.setFMUState(fresh.deserializeFMUState(raw))
-    assert _steps(fresh, vr, commands[70:], 70) == expected
-    fresh.freeInstance()
+def test_get_and_set_and_serialised_state_restore_exactly(shaper_fmu):
+    assert_state_restores_exactly(shaper_fmu, command_signal(120), H, at=40)
 
 
 def test_a_forged_state_is_refused_with_error_and_the_instance_lives_on(shaper_fmu):
@@ -192,16 +167,7 @@ def test_a_step_that_is_not_a_whole_number_of_samples_is_an_error(shaper_fmu):
 
 
 def test_nan_input_fails_that_step_and_leaves_the_state_untouched(shaper_fmu):
-    commands = command_signal(80)
-    slave, vr = initialised(shaper_fmu)
-    out = _steps(slave, vr, commands[:30], 0)
-    slave.setReal([vr["u"]], [float("nan")])
-    with pytest.raises(FMICallException) as failure:
-        slave.doStep(30 * H, H)
-    assert failure.value.status == 3
-    out += _steps(slave, vr, commands[30:], 30)
-    slave.freeInstance()
-    assert out == run_fmpy(shaper_fmu, commands, H)
+    assert_nan_input_fails_that_step_only(shaper_fmu, command_signal(80), H, at=30)
 
 
 def test_runs_with_only_the_standard_library_and_two_builds_run_their_own_code(shaper_fmu, tmp_path, monkeypatch):
