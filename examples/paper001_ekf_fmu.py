@@ -175,7 +175,7 @@ def main():
         f, d, p = rows[key], design[key], PAPER_TABLE_1[kind]
         print(f"{guess:>6} {kind:>6} | {f[0]:8.4f} {f[1]:7.3f} {f[2]:7.4f} | {d[0]:10.4f} {d[1]:7.3f} {d[2]:7.4f} | "
               f"{p[0]:9.4f} {p[1]:7.3f} {p[2]:7.4f}")
-    print(f"(settle: s to 3 % of the unshaped amplitude; zeta31: eq. 31 from the peaks after the last impulse)")
+    print("(settle: s to 3 % of the unshaped amplitude; zeta31: eq. 31 from the peaks after the last impulse)")
     print(f"second method (design layer on the recorded signals) vs co-simulation: largest deviation "
           f"{result['second_method_deviation']:.2e}")
 

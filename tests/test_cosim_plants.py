@@ -62,8 +62,8 @@ def exact_step_response(t: np.ndarray, volts: float) -> np.ndarray:
     augmented = np.zeros((n + 1, n + 1))
     augmented[:n, :n], augmented[:n, n:] = A, B
     rows = []
-    for time in t:
-        x = scipy.linalg.expm(augmented * time)[:n, n:] @ [volts]
+    for instant in t:
+        x = scipy.linalg.expm(augmented * instant)[:n, n:] @ [volts]
         rows.append(C @ x + D @ [volts])
     return np.array(rows)
 

@@ -115,7 +115,6 @@ def test_curves_hold_the_states_of_the_exactly_simulated_shaped_bang_bang(name, 
     for two move lengths, lies on its curve, also with back EMF where no closed form is printed."""
     shaper = SHAPERS[name]
     curves = stos_curves(B2, U, shaper.times, shaper.amplitudes, damping)
-    n = len(shaper)
     for distance in (X, 3 * X):
         _, command, shaped = _shaped_bang_bang(shaper, damping, distance)
         t1, t2 = command.breaks[1], command.breaks[2]

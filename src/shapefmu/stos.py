@@ -398,7 +398,7 @@ def stos_report(path, distance: float, shaper: str = "simultaneous", Ts: float =
     ratios = ", ".join(f"{r / q:.3e}" for r, q in zip(m.residual_vibration, rigid_residual))
     lines += [f"move time (|x_r - X| <= {m.tolerance:g} |X|): {m.move_time:.8g} s; rigid time-optimal {rigid_T:.8g} s "
               f"+ shaper + 2 Ts = {rigid_T + law.shaper.duration + 2 * Ts:.8g} s",
-              f"residual vibration per mode (max |x_f| after the hand-over): "
+              "residual vibration per mode (max |x_f| after the hand-over): "
               + ", ".join(f"{r:.3e}" for r in m.residual_vibration) + f"; / unshaped rigid bang-bang: {ratios}",
               f"hand-over to the settle controller at {m.handover_time:.6g} s; peak |u| {m.peak_u:.4g}; "
               f"chattering {m.chattering} sign changes in the last quarter; final error {m.final_error:.2e} |X|"]

@@ -430,11 +430,11 @@ def _read_ssd(ssd: Path, origin: str) -> System:
         component.annotations = [copy.deepcopy(a) for a in item if _local(a.tag) == "Annotations"]
         bindings = _child(item, "ParameterBindings")
         for binding in _children(bindings, "ParameterBinding") if bindings is not None else []:
-            _read_binding(system, component, binding, base, where, prefix_required=False)
+            _read_binding(system, component, binding, base, where)
         system.components[name] = component
     system_bindings = _child(node, "ParameterBindings")
     for binding in _children(system_bindings, "ParameterBinding") if system_bindings is not None else []:
-        _read_binding(system, None, binding, base, f"{origin}: System {system.name!r}", prefix_required=True)
+        _read_binding(system, None, binding, base, f"{origin}: System {system.name!r}")
     connections = _child(node, "Connections")
     seen = {}
     for index, item in enumerate(_children(connections, "Connection") if connections is not None else [], 1):
@@ -464,8 +464,7 @@ def _read_ssd(ssd: Path, origin: str) -> System:
     return system
 
 
-def _read_binding(system: System, component: Component | None, binding: ET.Element, base: Path, where: str,
-                  prefix_required: bool) -> None:
+def _read_binding(system: System, component: Component | None, binding: ET.Element, base: Path, where: str) -> None:
     """Apply one ssd:ParameterBinding; a system-level binding's names are ``component.variable``."""
     if _child(binding, "ParameterMapping") is not None:
         raise ValueError(f"{where}: ParameterMapping is not supported; bind the FMU's variable names directly")

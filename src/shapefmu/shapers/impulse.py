@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from shapefmu.runtime import impulse_formulas
-from shapefmu.runtime.checks import check_finite, check_positive
+from shapefmu.runtime.checks import check_finite
 from shapefmu.runtime.shaper_filter import grid_impulses
 
 # Impulses closer than this (relative to the shaper's duration) are one impulse: convolution
