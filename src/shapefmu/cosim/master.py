@@ -33,9 +33,9 @@ Communication semantics (``t_k = t0 + k*h``; the last step is shortened to end e
   time, as libcosim's decimation factor does.
 * Model Exchange components are integrated by the master (see :mod:`shapefmu.cosim.units`).
 
-Speed: the per-step work is generated as one Python function for the system (no per-step
-dispatch on component kinds), calling the FMUs' C functions on preallocated ctypes arrays and
-argument objects (no per-call argument conversion, see :mod:`.units`).
+Speed: the per-step work is generated once for the system (no per-step dispatch on component
+kinds), as a C loop where the system allows, else as a Python function calling the FMUs' C
+functions on preallocated ctypes arrays (:mod:`.step_program`, :mod:`.units`).
 """
 
 from __future__ import annotations
@@ -50,9 +50,10 @@ from pathlib import Path
 
 import numpy as np
 
+from shapefmu.cosim import step_program
 from shapefmu.cosim.errors import AlgebraicLoopError, CosimError, CosimInterrupted
 from shapefmu.cosim.graph import Stage, _feeds_through, output_dependencies, schedule
-from shapefmu.cosim.units import FMUFailure, ModelExchangeUnit, load_units
+from shapefmu.cosim.units import FMUFailure, load_units
 from shapefmu.fmi.ssp import System, read_ssp
 
 ALGORITHMS = ("gauss-seidel", "jacobi")
@@ -82,12 +83,16 @@ class Master:
     tolerance : relative tolerance of CVode for Model Exchange components.
     loop_solver : "newton" | "fixed-point"; loop_tolerance, max_loop_iterations: its stopping rule.
     progress : print a progress bar on stderr.
+    native : run the per-step loop compiled in C (see :mod:`.step_program`) where the system allows
+        it: no Model Exchange component, no algebraic loop, a C compiler on the machine. The
+        results are bit-identical to the Python loop's; ``loop_kind`` says which one runs.
     """
 
     def __init__(self, system_or_path, step: float, *, algorithm: str = "gauss-seidel", record: list[str] | None = None,
                  output_interval: float | None = None, step_multiples: dict[str, int] | None = None,
                  model_exchange: list[str] | None = None, tolerance: float = 1e-8, loop_solver: str = "newton",
-                 loop_tolerance: float = 1e-13, max_loop_iterations: int = 50, progress: bool = False):
+                 loop_tolerance: float = 1e-13, max_loop_iterations: int = 50, progress: bool = False,
+                 native: bool = True):
         if not (isinstance(step, (int, float)) and math.isfinite(step) and step > 0):
             raise ValueError(f"step must be a finite number > 0 s, got {step!r}")
         if algorithm not in ALGORITHMS:
@@ -105,6 +110,7 @@ class Master:
         self.max_loop_iterations = max_loop_iterations
         self.tolerance = tolerance
         self.progress = progress
+        self.native = native
         self.output_interval = self._interval(output_interval)
         names = list(self.system.components)
         self.multiples = self._multiples(step_multiples or {}, names)
@@ -231,98 +237,12 @@ class Master:
 
     # ----------------------------------------------------------------------------- code generation
     def _compile(self):
-        """Generate ``run_chunk(k0, k1, row, t0, h, t_stop, last, buf)`` for this system and scheme."""
-        env = {"fail": self._fail, "solve_loop": self._solve_loop, "min": min}
-        index = {u.name: i for i, u in enumerate(self.units)}
-        for i, u in enumerate(self.units):
-            env.update({f"c{i}": u.c, f"set{i}": u.set_real, f"get{i}": u.get_real, f"do{i}": u.do_step,
-                        f"ivr{i}": u.in_vr, f"iv{i}": u.in_val, f"ovr{i}": u.out_vr, f"ov{i}": u.out_val,
-                        f"nin{i}": u.n_in_arg, f"nout{i}": u.n_out_arg, f"ta{i}": u.time_arg, f"ha{i}": u.step_arg,
-                        f"unit{i}": u})
-            if u.name in self._early:
-                env[f"ev{i}"] = self._early[u.name][1]
-        lines = ["def run_chunk(k0, k1, row, t0, h, t_stop, last, buf, every):",
-                 "    for k in range(k0, k1):",
-                 "        t = t0 + k * h",
-                 "        dt = h if k != last else t_stop - t"]
-
-        def due(i):
-            m = self.multiples[self.units[i].name]
-            return None if m == 1 else f"k % {m} == 0"
-
-        def ends(i):
-            m = self.multiples[self.units[i].name]
-            return None if m == 1 else f"(k + 1) % {m} == 0 or k == last"
-
-        def input_lines(i, indent):
-            out = []
-            for d, source, s, f, o in self._ops[self.units[i].name]:
-                j = index[source.name]
-                early = source.name in self._early and s in self._early[source.name][0]
-                expression = f"{'ev' if early else 'ov'}{j}[{s}]" + ("" if f == 1.0 else f" * {f!r}") + ("" if o == 0.0 else f" + {o!r}")
-                out.append(f"{indent}iv{i}[{d}] = {expression}")
-            return out
-
-        def step_lines(i, indent, with_inputs):
-            unit = self.units[i]
-            m = self.multiples[unit.name]
-            h_expression = "dt" if m == 1 else f"min({m!r} * h, t_stop - t)"
-            out = input_lines(i, indent) if with_inputs else []
-            if unit.n_in:
-                out.append(f"{indent}if (status := set{i}(c{i}, ivr{i}, nin{i}, iv{i})) > 1: fail({i}, 'fmi2SetReal', t, status)")
-            if unit.name in self._early:
-                out.append(f"{indent}if (status := get{i}(c{i}, ovr{i}, nout{i}, ev{i})) > 1: fail({i}, 'fmi2GetReal', t, status)")
-            if isinstance(unit, ModelExchangeUnit):
-                out.append(f"{indent}unit{i}.step(t, {h_expression})")
-            else:
-                out.append(f"{indent}ta{i}.value = t")
-                out.append(f"{indent}ha{i}.value = {h_expression}")
-                out.append(f"{indent}if (status := do{i}(c{i}, ta{i}, ha{i}, 0)) > 1: fail({i}, 'fmi2DoStep', t, status)")
-            return out
-
-        def read_lines(i, indent):
-            unit = self.units[i]
-            if not unit.n_out:
-                return []
-            return [f"{indent}if (status := get{i}(c{i}, ovr{i}, nout{i}, ov{i})) > 1: fail({i}, 'fmi2GetReal', t + dt, status)"]
-
-        def guarded(condition, body):
-            if condition is None:
-                return [f"        {line}" for line in body]
-            return [f"        if {condition}:"] + [f"            {line}" for line in body]
-
-        body = []
-        if self.algorithm == "jacobi":
-            for i in range(len(self.units)):
-                body += guarded(due(i), input_lines(i, ""))
-            for i in range(len(self.units)):
-                body += guarded(due(i), step_lines(i, "", with_inputs=False))
-                body += guarded(ends(i), read_lines(i, ""))
-        else:
-            loop_number = 0
-            for stage in self.stages:
-                if stage.is_loop:
-                    body.append(f"        solve_loop({loop_number}, t, dt)")
-                    loop_number += 1
-                    continue
-                i = index[stage.components[0]]
-                body += guarded(due(i), step_lines(i, "", with_inputs=True))
-                condition = ends(i)
-                if self._reads_only_to_record(stage.components[0]):
-                    recording = "(k + 1) % every == 0 or k == last"
-                    condition = recording if condition is None else f"({condition}) and ({recording})"
-                body += guarded(condition, read_lines(i, ""))
-        lines += body
-        recorded = ", ".join(f"ov{index[c]}[{s}]" for c, s in self._record_sources)
-        lines += ["        if (k + 1) % every == 0 or k == last:",
-                  f"            buf[row] = (t + dt, {recorded})" if recorded else "            buf[row] = (t + dt,)",
-                  "            row += 1",
-                  "    return row"]
-        source = "\n".join(lines)
-        namespace = dict(env)
-        exec(compile(source, f"<shapefmu master for {self.system.name}>", "exec"), namespace)  # noqa: S102
-        self._source = source
-        return namespace["run_chunk"]
+        """``run_chunk(k0, k1, row, t0, h, t_stop, last, buf, every)`` for this system and scheme:
+        the compiled C loop where the system allows it, else the generated Python one."""
+        blocks = step_program.plan(self)
+        native = step_program.native_chunk(self, blocks) if self.native else None
+        self.loop_kind = "C" if native else "Python"
+        return native or step_program.python_chunk(self, blocks)
 
     def _reads_only_to_record(self, name: str) -> bool:
         """Whether every connected output of ``name`` is passed on as read before its step, so the
