@@ -28,7 +28,7 @@ from fmpy.fmi2 import FMU2Slave
 
 from shapefmu.cosim import Master
 from shapefmu.fmi import build_fmu
-from shapefmu.fmi.plantgen import build_plant_fmu
+from shapefmu.fmi.native import build_plant_fmu
 from shapefmu.fmi.ssp import PARAMETER_SET, System
 
 STEP = 1e-6

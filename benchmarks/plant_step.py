@@ -18,7 +18,7 @@ from fmpy import extract, read_model_description
 from fmpy.fmi2 import FMU2Slave
 from pythonfmu import FmuBuilder
 
-from shapefmu.fmi.plantgen import build_plant_fmu
+from shapefmu.fmi.native import build_plant_fmu
 from shapefmu.plants import load
 
 MODEL = Path(__file__).resolve().parent.parent / "models" / "disk_drive.toml"

@@ -24,7 +24,7 @@ from distributed import Client, LocalCluster
 
 from shapefmu import sweep as sweeps
 from shapefmu.fmi import build_fmu
-from shapefmu.fmi.plantgen.build import build_plant_fmu
+from shapefmu.fmi.native.build import build_plant_fmu
 from shapefmu.fmi.ssp import System
 from shapefmu.plants import load
 from shapefmu.shapers.twin_pulse import m_bc_tz_tp

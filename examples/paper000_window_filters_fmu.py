@@ -46,7 +46,7 @@ from scipy.optimize import brentq, minimize_scalar  # noqa: E402
 from shapefmu.analysis import insensitivity, residual_vibration  # noqa: E402
 from shapefmu.cosim import Master  # noqa: E402
 from shapefmu.fmi import build_fmu  # noqa: E402
-from shapefmu.fmi.plantgen import build_plant_fmu  # noqa: E402
+from shapefmu.fmi.native import build_plant_fmu  # noqa: E402
 from shapefmu.fmi.ssp import System  # noqa: E402
 from shapefmu.plants.library import rigid_flexible  # noqa: E402
 from shapefmu.shapers.window import hanning_filter, rectangle_filter  # noqa: E402

@@ -50,7 +50,7 @@ import ekf_shaping as design_example  # noqa: E402  (examples/ekf_shaping.py: th
 from shapefmu.cosim import Master  # noqa: E402
 from shapefmu.estimation import EKFTunedShaper  # noqa: E402
 from shapefmu.fmi import build_fmu  # noqa: E402
-from shapefmu.fmi.plantgen import build_plant_fmu  # noqa: E402
+from shapefmu.fmi.native import build_plant_fmu  # noqa: E402
 from shapefmu.fmi.ssp import System  # noqa: E402
 from shapefmu.plants.library import rigid_flexible  # noqa: E402
 

@@ -46,7 +46,7 @@ import ten_pendula as design_example  # noqa: E402  (examples/ten_pendula.py: th
 
 from shapefmu import sweep  # noqa: E402
 from shapefmu.fmi import build_fmu  # noqa: E402
-from shapefmu.fmi.plantgen import build_plant_fmu  # noqa: E402
+from shapefmu.fmi.native import build_plant_fmu  # noqa: E402
 from shapefmu.fmi.ssp import System  # noqa: E402
 from shapefmu.plants.library import INCH  # noqa: E402
 from shapefmu.runtime.twin_pulse import twin_pulse_profile  # noqa: E402

@@ -48,7 +48,7 @@ from scipy.integrate import simpson  # noqa: E402
 from shapefmu.analysis import spectrum  # noqa: E402
 from shapefmu.cosim import Master  # noqa: E402
 from shapefmu.fmi import build_fmu  # noqa: E402
-from shapefmu.fmi.plantgen import build_plant_fmu  # noqa: E402
+from shapefmu.fmi.native import build_plant_fmu  # noqa: E402
 from shapefmu.fmi.ssp import System  # noqa: E402
 from shapefmu.optimal import Command, simulate  # noqa: E402
 from shapefmu.plants import library  # noqa: E402

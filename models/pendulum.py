@@ -13,7 +13,7 @@ Outputs: cart position, swing angle, and the horizontal position of the bob x + 
 
 import casadi as ca
 
-from shapefmu.fmi.plantgen import NonlinearPlant, Output, Variable
+from shapefmu.fmi.native import NonlinearPlant, Output, Variable
 
 
 def plant() -> NonlinearPlant:

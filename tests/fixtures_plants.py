@@ -18,7 +18,7 @@ def plant_fmus(tmp_path_factory) -> dict:
     """{model name: FMU path} for every plant of models/, built by build_all."""
     from fmpy import read_model_description
 
-    from shapefmu.fmi.plantgen import build_all
+    from shapefmu.fmi.native import build_all
 
     paths = build_all(MODELS, tmp_path_factory.mktemp("plant_fmus"))
     return {read_model_description(str(path)).modelName: path for path in paths}

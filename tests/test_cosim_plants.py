@@ -23,7 +23,7 @@ PLANT_OUTPUTS = ["plant.position", "plant.deflection_1", "plant.deflection_2"]
 
 @pytest.fixture(scope="module")
 def disk_drive_fmu(tmp_path_factory):
-    from shapefmu.fmi.plantgen import build_plant_fmu
+    from shapefmu.fmi.native import build_plant_fmu
 
     return build_plant_fmu(MODEL, tmp_path_factory.mktemp("cosim_plant") / "DiskDrive.fmu")
 

@@ -60,7 +60,7 @@ def test_gauss_seidel_closed_loop_reproduces_simulate_stos(stos_ssd):
     the controller's step, computed from the previous measurement: a one-step delay, which this
     law, switching within the sample, pays with ~1e-5 rad of residual vibration.)
 
-    What remains is rounding: plantgen's C matrix exponential against scipy's, ~1e-16 relative
+    What remains is rounding: the generated plant's C matrix exponential against scipy's, ~1e-16 relative
     per step. The sub-sample blend amplifies a state difference at a switch (as above, up to
     ~1e-9 U); such a u difference moves the velocity by b du Ts per step and the position by at
     most b du Ts t_end = 2.7e3 * 1.1e-8 * 1e-6 * 4e-3 ~ 1e-13 rad over the run: hence 1e-9 U on

@@ -106,7 +106,7 @@ def test_ekf_tuned_table_matches_the_design_example(paper001_result):
 def paper002_result(stos_fmu, tmp_path_factory):
     """The project's models/disk_drive_stos.ssd, its FMUs where its sources point (../fmus/)."""
     from shapefmu.cosim.compare import measured_plant
-    from shapefmu.fmi.plantgen import build_plant_fmu
+    from shapefmu.fmi.native import build_plant_fmu
 
     root = tmp_path_factory.mktemp("paper002")
     (root / "models").mkdir()

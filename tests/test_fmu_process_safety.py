@@ -4,7 +4,7 @@ Two hazards live in every process that hosts our pythonfmu-based FMUs (fmpy, the
 
 - pythonfmu 0.7.0's export library re-executes the FMU's entry module at every fmi2Instantiate and
   then releases the module's globals once more than it took; the entry module written by
-  ``shapefmu.fmi.builder`` takes one reference back per execution
+  ``shapefmu.fmi.python.builder`` takes one reference back per execution
   (``slave_base.ENTRY_MODULE_REFERENCES``). Counted wrong, the globals are freed while the module
   still uses them, and a later FMU in the process crashes.
 - fmpy's logger proxy (``fmpy.logging.addLoggerProxy``) formats the C message and then calls ONE

@@ -173,7 +173,7 @@ def test_nan_input_fails_that_step_and_leaves_the_state_untouched(shaper_fmu):
 def test_runs_with_only_the_standard_library_and_two_builds_run_their_own_code(shaper_fmu, tmp_path, monkeypatch):
     from fmpy import extract
 
-    from shapefmu.fmi import builder
+    from shapefmu.fmi.python import builder
 
     # A second build whose bundled design module differs: its "zv" designs a ZVD shaper.
     original = builder.bundled_sources

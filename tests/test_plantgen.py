@@ -1,4 +1,4 @@
-"""The plant-FMU generator (shapefmu.fmi.plantgen): native FMI 2.0 ME + CS FMUs from models/.
+"""The plant-FMU generator (shapefmu.fmi.native): native FMI 2.0 ME + CS FMUs from models/.
 
 References: the exact solution of the LTI (scipy expm) for Model Exchange, the exact zero-order-hold
 discretisation (scipy expm of the augmented matrix) for Co-Simulation, scipy's solve_ivp for the
@@ -430,7 +430,7 @@ def test_fmpy_rebuild_from_the_shipped_sources_gives_the_same_results(plant_fmus
 def test_python_control_lti_becomes_a_state_space_fmu_with_tunable_matrices(tmp_path):
     import control
 
-    from shapefmu.fmi.plantgen import build_plant_fmu
+    from shapefmu.fmi.native import build_plant_fmu
     from shapefmu.plants import as_plant
 
     system = control.ss(control.tf([400.0], [1.0, 4.0, 400.0]), name="resonator")
@@ -446,7 +446,7 @@ def test_python_control_lti_becomes_a_state_space_fmu_with_tunable_matrices(tmp_
 
 
 def test_library_plant_keeps_its_physical_parameters(tmp_path):
-    from shapefmu.fmi.plantgen import build_plant_fmu
+    from shapefmu.fmi.native import build_plant_fmu
     from shapefmu.plants import disk_drive
 
     fmu = build_plant_fmu(disk_drive(back_emf=True), tmp_path / "Library.fmu", name="library_disk_drive")

@@ -44,13 +44,13 @@ def analytic_swing():
 
 @pytest.fixture(scope="module")
 def ten_pendula_ssp(tmp_path_factory):
-    """The ten-pendula system of paper 003: ReferencePlayer -> native plant FMU (plantgen).
+    """The ten-pendula system of paper 003: ReferencePlayer -> native plant FMU (shapefmu.fmi.native).
 
     The player holds the sampled cart acceleration, y(t) = a[floor(t / STEP)] (0 after the last
     sample), the zero-order hold that ``pendula_swing`` integrates in closed form.
     """
     from shapefmu.fmi import build_fmu
-    from shapefmu.fmi.plantgen.build import build_plant_fmu
+    from shapefmu.fmi.native.build import build_plant_fmu
     from shapefmu.fmi.ssp import System
 
     folder = tmp_path_factory.mktemp("ten_pendula")

@@ -14,8 +14,8 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from shapefmu.fmi.builder import build_all, build_fmu
-from shapefmu.fmi.slaves.shaper import KINDS, MAX_MODES
+from shapefmu.fmi.python.builder import build_all, build_fmu
+from shapefmu.fmi.python.slaves.shaper import KINDS, MAX_MODES
 
 
 def _add_all(parser):
@@ -24,7 +24,7 @@ def _add_all(parser):
 
 
 def _build_all(args):
-    from shapefmu.fmi.plantgen import build_all as build_all_plants
+    from shapefmu.fmi.native import build_all as build_all_plants
 
     return [*build_all(args.out), *build_all_plants(args.models, args.out)]
 
@@ -77,7 +77,7 @@ def _build_reference(args):
 
 def _add_shape_filter(parser):
     from shapefmu.cli import parse_mode
-    from shapefmu.fmi.slaves.shape_filter import BASES, KINDS as FILTER_KINDS
+    from shapefmu.fmi.python.slaves.shape_filter import BASES, KINDS as FILTER_KINDS
 
     parser.add_argument("--kind", choices=FILTER_KINDS, default="hanning", help="filter design (default hanning)")
     parser.add_argument("--mode", type=parse_mode, required=True, metavar="HZ[:ZETA]",

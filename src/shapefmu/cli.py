@@ -171,7 +171,7 @@ def _cmd_plant_show(args) -> int:
 
 
 def _cmd_plant_build(args) -> int:
-    from shapefmu.fmi.plantgen import build_plant_fmu, model_from_file
+    from shapefmu.fmi.native import build_plant_fmu, model_from_file
 
     model = model_from_file(args.file)
     if model is None:

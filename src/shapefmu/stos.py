@@ -31,7 +31,7 @@ import control
 import numpy as np
 from scipy.linalg import expm
 
-from shapefmu.plants.model import Plant, as_plant
+from shapefmu.plants import Plant, as_plant
 from shapefmu.runtime.checks import check_finite, check_positive
 from shapefmu.runtime.stos import STOSKernel, stos_curves
 from shapefmu.shapers import ImpulseShaper, convolve_modes, design

@@ -55,19 +55,19 @@ _SETTLE_KEYS = ("kp", "kd", "ki", "x_enter", "v_enter", "x_exit", "v_exit")
 
 
 def measured_plant(plant):
-    """A plant of paper 002's eq. (1) form as a plantgen model whose outputs are ``position``,
+    """A plant of paper 002's eq. (1) form as a native plant model whose outputs are ``position``,
     ``velocity`` (the rigid-body x_r', which a STOS controller measures) and ``deflection_i``.
 
     The plant's own model file exposes no velocity, and a ``Plant`` with an extra row in C becomes
-    plantgen's generic state-space kind, whose tunable D makes every output depend on the input
+    the plant generator's generic state-space kind, whose tunable D makes every output depend on the input
     (an algebraic loop with a feed-through controller). This model is written symbolically in the
     physical parameters instead (``b2``, ``rigid_damping``, ``f[i]`` in Hz, ``zeta[i]``, ``b4[i]``,
     the names the model files give), so its outputs depend on the states only; it is linear, and
-    plantgen steps it by the exact zero-order hold.
+    the generated plant steps it by the exact zero-order hold.
     """
     import casadi as ca
 
-    from shapefmu.fmi.plantgen import Output, Variable
+    from shapefmu.fmi.native import Output, Variable
     from shapefmu.plants import as_plant
     from shapefmu.stos import rigid_body
 
@@ -99,9 +99,9 @@ def measured_plant(plant):
 
 
 def _linear_symbolic_plant(**fields):
-    """A plantgen ``NonlinearPlant`` whose equations are linear in x and u, built with the exact
+    """A plant-generator ``NonlinearPlant`` whose equations are linear in x and u, built with the exact
     zero-order-hold step (and no RK4 substep parameter) like the linear model files."""
-    from shapefmu.fmi.plantgen import NonlinearPlant
+    from shapefmu.fmi.native import NonlinearPlant
 
     class LinearSymbolicPlant(NonlinearPlant):
         def model_part(self):
@@ -139,14 +139,14 @@ class FMUCache:
         return path
 
     def slave(self, name: str) -> Path:
-        """``<name>.fmu`` for a slave of ``shapefmu.fmi.slaves`` (e.g. "Shaper", "STOSController")."""
-        from shapefmu.fmi.builder import build_fmu, bundled_sources, package_name
+        """``<name>.fmu`` for a slave of ``shapefmu.fmi.python.slaves`` (e.g. "Shaper", "STOSController")."""
+        from shapefmu.fmi.python.builder import build_fmu, bundled_sources, package_name
 
         return self._cached(f"{name}.fmu", package_name(bundled_sources(name)), lambda path: build_fmu(name, path))
 
     def plant(self, plant) -> Path:
         """The measured plant FMU (``measured_plant``) of a Plant or model file, e.g. DiskDriveMeasured.fmu."""
-        from shapefmu.fmi.plantgen import build_plant_fmu, fmu_file_name
+        from shapefmu.fmi.native import build_plant_fmu, fmu_file_name
         from shapefmu.plants import as_plant
 
         plant = as_plant(plant)

@@ -10,8 +10,8 @@ from shapefmu.plants.library import (
     ten_pendula,
     transfer_function,
 )
-from shapefmu.plants.loader import KINDS, describe, load, loads
-from shapefmu.plants.model import Mode, Parameter, Plant, as_plant, rigid_part
+from shapefmu.plants.loader import KINDS, as_plant, describe, load, loads
+from shapefmu.plants.model import Mode, Parameter, Plant, rigid_part
 
 __all__ = [
     "KINDS",

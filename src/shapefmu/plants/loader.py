@@ -26,6 +26,8 @@ import os
 import tomllib
 from dataclasses import dataclass
 
+import control
+
 from shapefmu.plants import library
 from shapefmu.plants.model import Parameter, Plant
 
@@ -44,7 +46,7 @@ _FREQUENCY = {"Hz": 2.0 * math.pi, "rad/s": 1.0}
 _LENGTH = {"m": 1.0, "in": library.INCH, "mm": 1e-3}
 
 # Per kind: its parameters' specs, name -> ParameterSpec (also read by the plant-FMU generator,
-# shapefmu.fmi.plantgen, to convert model-file units).
+# shapefmu.fmi.native, to convert model-file units).
 PARAMETER_SPECS = {
     "rigid_flexible": {
         "b2": ParameterSpec(False),
@@ -199,10 +201,19 @@ def load(path) -> Plant:
     return loads(text, source=path)
 
 
+def as_plant(system) -> Plant:
+    """A ``Plant`` from a plant, a python-control LTI, or a path to a model file."""
+    if isinstance(system, Plant):
+        return system
+    if isinstance(system, (control.StateSpace, control.TransferFunction)):
+        return Plant.from_lti(system)
+    if isinstance(system, str) or hasattr(system, "__fspath__"):
+        return load(system)
+    raise ValueError(f"expected a Plant, a python-control LTI or a model file path, got {type(system).__name__}")
+
+
 def describe(path_or_plant) -> str:
     """The text of ``shapefmu plant show FILE``: the plant's signals, parameters and modes."""
-    from shapefmu.plants.model import as_plant
-
     plant = as_plant(path_or_plant)
     lines = [f"plant {plant.name} (kind {plant.kind}), {plant.n_states} states"]
     for signal in plant.inputs:

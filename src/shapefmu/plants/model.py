@@ -1,9 +1,10 @@
 """The ``Plant``: a linear model with named inputs, outputs, states and physical parameters.
 
 A plant is x' = A x + B u, y = C x + D u. It converts to and from python-control ``StateSpace`` /
-``TransferFunction``, and every function that expects a plant also takes a python-control LTI
-(``as_plant``). ``modes()`` lists the natural frequencies, damping ratios and participations that a
-shaper is designed from.
+``TransferFunction``; every function that expects a plant also takes a python-control LTI or a
+model file (``shapefmu.plants.as_plant``, which lives in ``loader`` because it reads files).
+``modes()`` lists the natural frequencies, damping ratios and participations that a shaper is
+designed from.
 """
 
 from __future__ import annotations
@@ -171,19 +172,6 @@ class Plant:
         This is what ``shapefmu.shapers.convolve_modes`` and ``simultaneous`` take.
         """
         return [(m.omega, m.zeta) for m in self.modes() if m.oscillatory and m.participation > threshold]
-
-
-def as_plant(system) -> Plant:
-    """A ``Plant`` from a plant, a python-control LTI, or a path to a model file."""
-    if isinstance(system, Plant):
-        return system
-    if isinstance(system, (control.StateSpace, control.TransferFunction)):
-        return Plant.from_lti(system)
-    if isinstance(system, str) or hasattr(system, "__fspath__"):
-        from shapefmu.plants.loader import load
-
-        return load(system)
-    raise ValueError(f"expected a Plant, a python-control LTI or a model file path, got {type(system).__name__}")
 
 
 def _is_rigid(eigenvalue, scale) -> bool:

@@ -24,9 +24,9 @@ acceleration jumps from 0 to its first level: ModelStructure declares that accel
 ``start``; position and velocity start at 0 and do not.
 """
 
-from ...runtime import shaped_bang_bang, shaper_designs, time_frequency, twin_pulse
-from ...runtime.checks import check_finite, check_positive
-from ...runtime.motion import PiecewiseAcceleration
+from ....runtime import shaped_bang_bang, shaper_designs, time_frequency, twin_pulse
+from ....runtime.checks import check_finite, check_positive
+from ....runtime.motion import PiecewiseAcceleration
 from ..slave_base import Fmi2Slave
 
 PROFILES = (*twin_pulse.KINDS, "time-frequency", "bang-bang")

@@ -19,7 +19,7 @@ import casadi as ca
 import numpy as np
 import scipy.linalg
 
-from shapefmu.fmi.plantgen.model_part import ModelPart, ScalarParameter, Signal
+from shapefmu.fmi.native.model_part import ModelPart, ScalarParameter, Signal
 from shapefmu.plants import Plant
 from shapefmu.plants.library import STANDARD_GRAVITY
 from shapefmu.plants.loader import PARAMETER_SPECS

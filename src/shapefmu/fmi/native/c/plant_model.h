@@ -1,5 +1,5 @@
 /* The contract between the generic FMI 2.0 wrapper (plant_fmi2.c) and a generated model part
- * (model.c, written by shapefmu.fmi.plantgen for one plant).
+ * (model.c, written by shapefmu.fmi.native for one plant).
  *
  * As in the FMI Reference FMUs, the wrapper is written once and the model part is small: sizes,
  * names, start values and parameter constraints (the table `plant_model`), and three numerical

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 
 import casadi as ca
 
-from shapefmu.fmi.plantgen.model_part import ModelPart, ScalarParameter, Signal
+from shapefmu.fmi.native.model_part import ModelPart, ScalarParameter, Signal
 
 
 @dataclass(frozen=True)

@@ -17,7 +17,7 @@ No inputs, so no output depends on one; the table is fixed at initialisation.
 
 import json
 
-from ...runtime.reference_player import SignalTable, from_dict
+from ....runtime.reference_player import SignalTable, from_dict
 from ..slave_base import Fmi2Slave
 
 # A rigid-body bang-bang of unit level and length, so that a default build plays something sensible.

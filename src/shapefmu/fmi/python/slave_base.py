@@ -23,8 +23,8 @@ What the base guarantees for every FMU built on it:
 
 How to add an FMU (one module and one registry line):
 
-1. Write ``shapefmu/fmi/slaves/<module>.py`` with one class deriving from ``Fmi2Slave``. Import only
-   the standard library, ``..slave_base`` and ``...runtime`` (relative imports: the module is
+1. Write ``shapefmu/fmi/python/slaves/<module>.py`` with one class deriving from ``Fmi2Slave``. Import only
+   the standard library, ``..slave_base`` and ``....runtime`` (relative imports: the module is
    bundled under a package name unique to the build). Set the class attributes ``model_name``,
    ``description``, ``default_experiment`` (start, stop, step), ``kernels`` (the runtime classes
    that may appear in the state) and ``state_attributes`` (the attribute names holding them).
@@ -39,7 +39,7 @@ How to add an FMU (one module and one registry line):
    for a step the FMU cannot honour. Inputs are already checked for NaN.
 5. ``output_dependencies(self)``: after ``initialize``, ``{output: [inputs it feeds through from]}``;
    the builder writes it into ModelStructure (and InitialUnknowns).
-6. Add ``"<ModelName>": "<module>"`` to ``SLAVES`` in ``shapefmu/fmi/slaves/__init__.py``; then
+6. Add ``"<ModelName>": "<module>"`` to ``SLAVES`` in ``shapefmu/fmi/python/slaves/__init__.py``; then
    ``shapefmu.fmi.build_fmu("<ModelName>", path, **start_values)`` builds it, ``build_all`` and
    ``shapefmu build`` include it, and ``tests/test_fmi_build.py`` validates it with fmpy.
 """

@@ -1,4 +1,8 @@
-"""Plant-FMU generator: native FMI 2.0 Model Exchange + Co-Simulation FMUs from plant models.
+"""Native C FMUs: the generic FMI 2.0 layer (``c/``) and the plant-FMU generator.
+
+It may import the design layer (``shapefmu.plants``) and CasADi for code generation; the C it
+emits and compiles needs nothing but a C compiler. The generator writes FMI 2.0 Model Exchange +
+Co-Simulation FMUs from plant models:
 
     build_plant_fmu(model, out_path, *, name=None) -> Path
     build_all(models_dir, out_dir) -> list[Path]
@@ -34,7 +38,7 @@ parameter's range (e.g. ``f[1] <= 0``, ``zeta`` outside [0, 1)) is refused with 
 logged message, as is any non-finite input, a negative step, or a call out of order.
 """
 
-from shapefmu.fmi.plantgen.build import build_all, build_plant_fmu, fmu_file_name, model_from_file
-from shapefmu.fmi.plantgen.nonlinear import NonlinearPlant, Output, Variable
+from shapefmu.fmi.native.build import build_all, build_plant_fmu, fmu_file_name, model_from_file
+from shapefmu.fmi.native.nonlinear import NonlinearPlant, Output, Variable
 
 __all__ = ["NonlinearPlant", "Output", "Variable", "build_all", "build_plant_fmu", "fmu_file_name", "model_from_file"]

@@ -18,9 +18,9 @@ once per sample with those inputs.
 
 import math
 
-from ...runtime import shaper_designs
-from ...runtime.checks import check_count, check_finite, check_positive, whole_samples
-from ...runtime.stos import STOSKernel, stos_curves
+from ....runtime import shaper_designs
+from ....runtime.checks import check_count, check_finite, check_positive, whole_samples
+from ....runtime.stos import STOSKernel, stos_curves
 from ..slave_base import Fmi2Slave
 
 MAX_MODES = 4

@@ -2,8 +2,8 @@
 
 A ``ModelPart`` holds x' = f(x, u, p), y = g(x, u, p) as CasADi SX expressions of the state x, the
 input u and the scalar parameters p, with the names, units, start values and constraints the FMU
-declares. Linear plants (``shapefmu.fmi.plantgen.linear``) and nonlinear ones
-(``shapefmu.fmi.plantgen.nonlinear``) both end here, so that one code generator and one C wrapper
+declares. Linear plants (``shapefmu.fmi.native.linear``) and nonlinear ones
+(``shapefmu.fmi.native.nonlinear``) both end here, so that one code generator and one C wrapper
 serve both.
 """
 

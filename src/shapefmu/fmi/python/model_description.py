@@ -12,7 +12,7 @@ from xml.dom import minidom
 from xml.etree.ElementTree import Element, SubElement, tostring
 
 from shapefmu import __version__
-from shapefmu.fmi.slave_base import UNITS
+from shapefmu.fmi.python.slave_base import UNITS
 
 
 def _number(value):

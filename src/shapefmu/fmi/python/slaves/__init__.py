@@ -2,7 +2,7 @@
 
 ``SLAVES`` maps the FMU's model name (its modelIdentifier) to the module under this package that
 defines the slave class of that name. Adding an FMU is one module and one line here; see the
-docstring of ``shapefmu.fmi.slave_base`` for the steps.
+docstring of ``shapefmu.fmi.python.slave_base`` for the steps.
 """
 
 SLAVES = {

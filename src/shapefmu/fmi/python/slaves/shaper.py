@@ -22,9 +22,9 @@ un-done.
 
 import math
 
-from ...runtime import shaper_designs
-from ...runtime.checks import check_count, check_finite, check_positive, check_vtol, whole_samples
-from ...runtime.shaper_filter import FeedthroughFIR, StreamingShaper, grid_impulses
+from ....runtime import shaper_designs
+from ....runtime.checks import check_count, check_finite, check_positive, check_vtol, whole_samples
+from ....runtime.shaper_filter import FeedthroughFIR, StreamingShaper, grid_impulses
 from ..slave_base import Fmi2Slave
 
 MAX_MODES = 4

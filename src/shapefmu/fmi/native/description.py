@@ -13,7 +13,7 @@ import uuid
 from xml.sax.saxutils import quoteattr
 
 from shapefmu import __version__
-from shapefmu.fmi.plantgen.model_part import ModelPart
+from shapefmu.fmi.native.model_part import ModelPart
 
 LOG_CATEGORIES = ("logStatusError", "logAll")
 
@@ -105,7 +105,7 @@ def model_description(part: ModelPart, guid: str, source_files: tuple[str, ...] 
         unit_definitions = f"  <UnitDefinitions>\n{unit_definitions}  </UnitDefinitions>\n"
     return f"""<?xml version="1.0" encoding="UTF-8"?>
 <fmiModelDescription{_attributes(fmiVersion="2.0", modelName=part.name, guid=guid, description=part.description,
-                                  generationTool=f"shapefmu {__version__} plantgen", variableNamingConvention="structured",
+                                  generationTool=f"shapefmu {__version__} plant generator", variableNamingConvention="structured",
                                   numberOfEventIndicators=0)}>
   <ModelExchange{common} providesDirectionalDerivative="true">
 {sources}  </ModelExchange>

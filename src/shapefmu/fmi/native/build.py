@@ -15,13 +15,13 @@ from pathlib import Path
 
 import fmpy
 
-from shapefmu.fmi.plantgen import description, linear
-from shapefmu.fmi.plantgen.codegen import write_sources
-from shapefmu.fmi.plantgen.model_part import ModelPart, check_name
-from shapefmu.fmi.plantgen.nonlinear import NonlinearPlant
+from shapefmu.fmi.native import description, linear
+from shapefmu.fmi.native.codegen import write_sources
+from shapefmu.fmi.native.model_part import ModelPart, check_name
+from shapefmu.fmi.native.nonlinear import NonlinearPlant
 from shapefmu.plants import as_plant
 
-# The hand-written C shipped with every plant FMU (package data in plantgen/c/).
+# The hand-written C shipped with every plant FMU (package data in fmi/native/c/).
 WRAPPER_SOURCES = ("plant_fmi2.c", "plant_expm.c")
 WRAPPER_HEADERS = ("plant_model.h", "plant_expm.h", "fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")
 COMPILE_FLAGS = ("-O2", "-shared", "-fPIC", "-std=c99", "-fvisibility=hidden")
@@ -72,11 +72,11 @@ def build_plant_fmu(model, out_path, *, name: str | None = None) -> Path:
     part = to_model_part(model, name)
     out_path = Path(out_path)
     identifier = description.model_identifier(part)
-    with tempfile.TemporaryDirectory(prefix="plantgen_") as tmp:
+    with tempfile.TemporaryDirectory(prefix="shapefmu_plant_") as tmp:
         root = Path(tmp)
         sources = root / "sources"
         sources.mkdir()
-        package = resources.files("shapefmu.fmi.plantgen") / "c"
+        package = resources.files("shapefmu.fmi.native") / "c"
         for file in WRAPPER_SOURCES + WRAPPER_HEADERS:
             (sources / file).write_bytes((package / file).read_bytes())
         # The GUID hashes the sources, which include the GUID: generate with a placeholder first.

@@ -38,9 +38,9 @@ the largest) is taken as the zero it is.
 
 import math
 
-from ...runtime import time_frequency, twin_pulse, window_filters
-from ...runtime.checks import check_count, check_finite, check_positive, check_zeta, whole_samples
-from ...runtime.shaper_filter import FeedthroughFIR, StreamingShaper
+from ....runtime import time_frequency, twin_pulse, window_filters
+from ....runtime.checks import check_count, check_finite, check_positive, check_zeta, whole_samples
+from ....runtime.shaper_filter import FeedthroughFIR, StreamingShaper
 from ..slave_base import Fmi2Slave
 
 WINDOW_KINDS = tuple(window_filters.WINDOW_FILTERS)

@@ -18,10 +18,10 @@ re-acquisition statistic, the shaper's ring buffer and any pending design.
 
 import math
 
-from ...runtime.checks import check_count, check_positive, whole_samples
-from ...runtime.ekf import ResonanceEKF
-from ...runtime.ekf_tuner import KINDS, EKFTunedShaperKernel
-from ...runtime.shaper_filter import StreamingShaper
+from ....runtime.checks import check_count, check_positive, whole_samples
+from ....runtime.ekf import ResonanceEKF
+from ....runtime.ekf_tuner import KINDS, EKFTunedShaperKernel
+from ....runtime.shaper_filter import StreamingShaper
 from ..slave_base import Fmi2Slave
 
 class EKFTuner(Fmi2Slave):

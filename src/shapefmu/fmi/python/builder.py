@@ -35,17 +35,17 @@ import zipfile
 from pathlib import Path
 
 from shapefmu import __version__
-from shapefmu.fmi.model_description import model_description
-from shapefmu.fmi.slaves import SLAVES
+from shapefmu.fmi.python.model_description import model_description
+from shapefmu.fmi.python.slaves import SLAVES
 
-FMI_DIR = Path(__file__).parent
-PACKAGE_DIR = FMI_DIR.parent
-SHIM_SOURCE = FMI_DIR / "shim" / "fmi2_shim.c"
+PYTHON_FMI_DIR = Path(__file__).parent
+PACKAGE_DIR = PYTHON_FMI_DIR.parent.parent
+SHIM_SOURCE = PYTHON_FMI_DIR / "shim" / "fmi2_shim.c"
 BUILD_FILE = "shapefmu_build.json"
 ENTRY_MODULE = '''"""Entry module of the {name} FMU, imported by pythonfmu's export library."""
 
-from {package}.fmi import slave_base as _slave_base
-from {package}.fmi.slaves.{module} import {name}  # noqa: F401
+from {package}.fmi.python import slave_base as _slave_base
+from {package}.fmi.python.slaves.{module} import {name}  # noqa: F401
 
 # Balances the export library's extra release of this module's globals (slave_base.ENTRY_MODULE_REFERENCES).
 _slave_base.ENTRY_MODULE_REFERENCES.append(globals())
@@ -55,10 +55,10 @@ FALLBACK_MINORS = (13, 12, 11, 10, 9, 8)
 
 
 def slave_class(name: str):
-    """The slave class registered as ``name`` in ``shapefmu.fmi.slaves.SLAVES``."""
+    """The slave class registered as ``name`` in ``shapefmu.fmi.python.slaves.SLAVES``."""
     if name not in SLAVES:
         raise ValueError(f"name must be one of {', '.join(SLAVES)}, got {name!r}")
-    module = importlib.import_module(f"shapefmu.fmi.slaves.{SLAVES[name]}")
+    module = importlib.import_module(f"shapefmu.fmi.python.slaves.{SLAVES[name]}")
     return getattr(module, name)
 
 
@@ -67,13 +67,14 @@ def bundled_sources(name: str) -> dict[str, bytes]:
     files = {
         "__init__.py": b'"""shapefmu code bundled into one FMU."""\n',
         "fmi/__init__.py": b"",
-        "fmi/slaves/__init__.py": b"",
+        "fmi/python/__init__.py": b"",
+        "fmi/python/slaves/__init__.py": b"",
     }
     for path in sorted((PACKAGE_DIR / "runtime").glob("*.py")):
         files[f"runtime/{path.name}"] = path.read_bytes()
     for module in ("slave_base.py", "state_codec.py"):
-        files[f"fmi/{module}"] = (FMI_DIR / module).read_bytes()
-    files[f"fmi/slaves/{SLAVES[name]}.py"] = (FMI_DIR / "slaves" / f"{SLAVES[name]}.py").read_bytes()
+        files[f"fmi/python/{module}"] = (PYTHON_FMI_DIR / module).read_bytes()
+    files[f"fmi/python/slaves/{SLAVES[name]}.py"] = (PYTHON_FMI_DIR / "slaves" / f"{SLAVES[name]}.py").read_bytes()
     return files
 
 
