@@ -38,7 +38,7 @@ from scipy.linalg import expm, matrix_balance
 from scipy.optimize import least_squares, linprog
 from scipy.sparse.csgraph import connected_components
 
-from shapefmu.plants.model import Plant, as_plant, rigid_part
+from shapefmu.plants import Plant, as_plant, rigid_part
 from shapefmu.runtime.checks import check_finite, check_positive
 
 
