@@ -221,11 +221,13 @@ def python_only_reason(master, blocks) -> str | None:
                 return f"component {master.units[op[1]].name!r} runs as Model Exchange (integrated in Python)"
             if op[0] == "loop":
                 return f"the algebraic loop through {', '.join(master._loops[op[1]].loop_variables)} is solved in Python"
-    for unit in master.units:
-        for f, channel in unit.channels.items():
-            if channel.family.c_type is None and (channel.n_in or channel.n_out):
-                names = channel.in_names + channel.out_names
-                return f"{unit.name}.{names[0]} is a {f} variable, which the compiled loop does not move"
+    for c in master.system.connections:
+        family = master._unit[c.end_component].input_slot[c.end_connector][0]
+        if master._unit[c.end_component].channels[family].family.c_type is None:
+            return f"connection {c.start} -> {c.end} joins {family} variables, which the compiled loop does not move"
+    for reference, (component, family, _) in zip(master.record, master._record_sources):
+        if master._unit[component].channels[family].family.c_type is None:
+            return f"recorded {reference} is a {family} variable, which the compiled loop does not move"
     compiler = os.environ.get("CC") or shutil.which("cc") or shutil.which("gcc")
     if not compiler:
         return "no C compiler (set CC or install gcc)"
