@@ -62,6 +62,8 @@ class FMUFailure(Exception):
         self.unit = unit
         self.call = call
         self.status = STATUS_NAMES.get(status, status)
+        if isinstance(status, int) and getattr(unit, "fmi3", False):
+            self.status = self.status.replace("fmi2", "fmi3")  # the same numbers name fmi3Status values
         self.time = time
         super().__init__(f"{call} returned {self.status}")
 
@@ -343,26 +345,35 @@ class ModelExchangeUnit(Unit):
         self._event_iteration()
         if self.terminated_at is not None:
             return
-        self._call("fmi2EnterContinuousTimeMode", self.fmu.enterContinuousTimeMode)
+        self._call(f"{self.prefix}EnterContinuousTimeMode", self.fmu.enterContinuousTimeMode)
         fmu, description = self.fmu, self.description
         self.solver = CVodeSolver(
             nx=description.numberOfContinuousStates, nz=description.numberOfEventIndicators,
-            get_x=fmu.getContinuousStates, set_x=fmu.setContinuousStates, get_dx=fmu.getDerivatives,
+            get_x=fmu.getContinuousStates, set_x=fmu.setContinuousStates, get_dx=self._derivatives_function(),
             get_z=fmu.getEventIndicators, get_nominals=fmu.getNominalsOfContinuousStates,
             set_time=fmu.setTime, input=_HeldInputs(), startTime=start_time,
             relativeTolerance=tolerance, maxNumSteps=100000,
         )
         self._held = None
 
+    def _derivatives_function(self):
+        return self.fmu.getDerivatives
+
+    def _discrete_states(self):
+        """fmi2NewDiscreteStates (FMI 3.0: fmi3UpdateDiscreteStates): (needed, terminate,
+        nominals changed, values changed, next event time defined, next event time)."""
+        return "fmi2NewDiscreteStates", self.fmu.newDiscreteStates
+
     def _event_iteration(self) -> None:
         """fmi2NewDiscreteStates until the FMU needs no more; remember its next time event, or that
         it asked to end the simulation (``terminated_at``)."""
         needed, terminate = True, False
+        call, function = self._discrete_states()
         while needed and not terminate:
-            needed, terminate, _, _, defined, next_time = self._call("fmi2NewDiscreteStates", self.fmu.newDiscreteStates)
+            needed, terminate, _, _, defined, next_time = self._call(call, function)
         if terminate:
             self.terminated_at = self.time
-            self.termination_call = "fmi2NewDiscreteStates set terminateSimulation"
+            self.termination_call = f"{call} set terminateSimulation"
         self.next_event_time = next_time if defined else math.inf
 
     def step(self, t: float, h: float) -> bool:
@@ -386,20 +397,20 @@ class ModelExchangeUnit(Unit):
         while t_end - time > tiny:
             t_next = min(t_end, self.next_event_time)
             state_event, _, time = self._call("CVode", self.solver.step, time, t_next)
-            self._call("fmi2SetTime", self.fmu.setTime, time)
-            step_event, terminate = self._call("fmi2CompletedIntegratorStep", self.fmu.completedIntegratorStep)
+            self._call(f"{self.prefix}SetTime", self.fmu.setTime, time)
+            step_event, terminate = self._call(f"{self.prefix}CompletedIntegratorStep", self.fmu.completedIntegratorStep)
             self.time = time
             if terminate:
                 self.terminated_at = time
-                self.termination_call = "fmi2CompletedIntegratorStep set terminateSimulation"
+                self.termination_call = f"{self.prefix}CompletedIntegratorStep set terminateSimulation"
                 return
             time_event = abs(time - self.next_event_time) <= tiny
             if state_event or step_event or time_event:
-                self._call("fmi2EnterEventMode", self.fmu.enterEventMode)
+                self._call(f"{self.prefix}EnterEventMode", self.fmu.enterEventMode)
                 self._event_iteration()
                 if self.terminated_at is not None:
                     return
-                self._call("fmi2EnterContinuousTimeMode", self.fmu.enterContinuousTimeMode)
+                self._call(f"{self.prefix}EnterContinuousTimeMode", self.fmu.enterContinuousTimeMode)
                 self.solver.reset(time)
         self.time = t_end
 
@@ -426,16 +437,22 @@ def load_units(components: list[tuple[str, Path]], model_exchange: set[str]) -> 
                 folders.append(folder)
                 extracted[fmu] = (folder, description)
             folder, description = extracted[fmu]
-            if description.fmiVersion != "2.0":
-                raise ValueError(f"component {name!r}: {fmu.name} is FMI {description.fmiVersion}; the master runs FMI 2.0")
+            if description.fmiVersion == "2.0":
+                cs, me = Unit, ModelExchangeUnit
+            elif description.fmiVersion.startswith("3."):
+                from shapefmu.cosim.units3 import ModelExchangeUnit3, Unit3
+
+                cs, me = Unit3, ModelExchangeUnit3
+            else:
+                raise ValueError(f"component {name!r}: {fmu.name} is FMI {description.fmiVersion}; the master runs FMI 2.0 and 3.0")
             if name in model_exchange:
                 if description.modelExchange is None:
                     raise ValueError(f"component {name!r}: {fmu.name} has no Model Exchange interface")
-                units.append(ModelExchangeUnit(name, fmu, folder, description))
+                units.append(me(name, fmu, folder, description))
             elif description.coSimulation is not None:
-                units.append(Unit(name, fmu, folder, description))
+                units.append(cs(name, fmu, folder, description))
             elif description.modelExchange is not None:
-                units.append(ModelExchangeUnit(name, fmu, folder, description))
+                units.append(me(name, fmu, folder, description))
             else:
                 raise ValueError(f"component {name!r}: {fmu.name} has neither a Co-Simulation nor a Model Exchange interface")
     except BaseException:
