@@ -2,7 +2,9 @@
 
 ``build_typed_stair(directory)`` builds tests/fmus_c/typed_stair.c (FMI 2.0 Model Exchange +
 Co-Simulation, a variable of every FMI 2.0 type, a termination request at ``stop_at``) with the
-modelDescription.xml below; the FMI 2.0 headers are the ones the plant FMUs ship.
+modelDescription.xml below; ``build_typed_stair3`` the same model as an FMI 3.0 FMU
+(typed_stair3.c: Float64, Int32, Enumeration, Boolean and String). The FMI headers are the ones
+the plant FMUs ship.
 """
 
 from __future__ import annotations
@@ -85,16 +87,17 @@ def typed_stair_description(identifier: str) -> str:
 """
 
 
-def compile_fmu(c_file: Path, description: str, identifier: str, out: Path, include: Path) -> Path:
+def compile_fmu(c_file: Path, description: str, identifier: str, out: Path, include: Path, platform: str) -> Path:
     """Compile ``c_file`` into binaries/<platform>/<identifier>.so and zip it with ``description``."""
     out.parent.mkdir(parents=True, exist_ok=True)
     binary = out.with_suffix(".so")
-    subprocess.run(["gcc", "-O2", "-shared", "-fPIC", "-std=c99", "-Wall", "-Werror", "-I", str(include),
+    subprocess.run(["gcc", "-O2", "-shared", "-fPIC", "-std=c99", "-Wall", "-Werror", "-I", str(include), "-I", str(HERE),
                     "-o", str(binary), str(c_file), "-lm"], check=True, capture_output=True, text=True)
     with zipfile.ZipFile(out, "w", zipfile.ZIP_DEFLATED) as archive:
         archive.writestr("modelDescription.xml", description)
-        archive.write(binary, f"binaries/{fmpy.platform}/{identifier}{fmpy.sharedLibraryExtension}")
-        archive.write(c_file, f"sources/{c_file.name}")
+        archive.write(binary, f"binaries/{platform}/{identifier}{fmpy.sharedLibraryExtension}")
+        for source in (c_file, HERE / "typed_stair_model.h"):
+            archive.write(source, f"sources/{source.name}")
     binary.unlink()
     return out
 
@@ -103,4 +106,62 @@ def build_typed_stair(directory: Path) -> Path:
     """The TypedStair FMU (see tests/fmus_c/typed_stair.c) in ``directory``."""
     include = Path(str(resources.files("shapefmu.fmi.native") / "c"))
     return compile_fmu(HERE / "typed_stair.c", typed_stair_description("TypedStair"), "TypedStair",
-                       Path(directory) / "TypedStair.fmu", include)
+                       Path(directory) / "TypedStair.fmu", include, fmpy.platform)
+
+
+_TYPED_STAIR3_VARIABLES = """
+    <Float64 name="time" valueReference="0" causality="independent" variability="continuous"/>
+    <Float64 name="x_in" valueReference="1" causality="input" start="0"/>
+    <Float64 name="x_out" valueReference="2" causality="output"/>
+    <Float64 name="period" valueReference="3" causality="parameter" variability="fixed" start="1"/>
+    <Float64 name="stop_at" valueReference="4" causality="parameter" variability="fixed" start="1e+300"/>
+    <Float64 name="level" valueReference="5" causality="output" initial="exact" start="0"/>
+    <Float64 name="der(level)" valueReference="6" causality="local" derivative="5"/>
+    <Int32 name="increment" valueReference="10" causality="parameter" variability="fixed" start="1"/>
+    <Int32 name="n_in" valueReference="11" causality="input" variability="discrete" start="0"/>
+    <Int32 name="counter" valueReference="12" causality="output" variability="discrete"/>
+    <Int32 name="n_out" valueReference="13" causality="output" variability="discrete"/>
+    <Enumeration name="mode" declaredType="Direction" valueReference="14" causality="parameter" variability="fixed" start="1"/>
+    <Enumeration name="e_in" declaredType="Direction" valueReference="15" causality="input" variability="discrete" start="1"/>
+    <Enumeration name="e_out" declaredType="Direction" valueReference="16" causality="output" variability="discrete"/>
+    <Boolean name="negate" valueReference="20" causality="parameter" variability="fixed" start="false"/>
+    <Boolean name="b_in" valueReference="21" causality="input" variability="discrete" start="false"/>
+    <Boolean name="b_out" valueReference="22" causality="output" variability="discrete"/>
+    <String name="label" valueReference="30" causality="parameter" variability="fixed"><Start value="stair"/></String>
+    <String name="s_in" valueReference="31" causality="input" variability="discrete"><Start value=""/></String>
+    <String name="s_out" valueReference="32" causality="output" variability="discrete"/>
+"""
+_TYPED_STAIR3_STRUCTURE = "".join(
+    f'    <{element} valueReference="{vr}" dependencies="{dependencies}"/>\n'
+    for element, vr, dependencies in (
+        ("Output", 2, "1"), ("Output", 5, ""), ("Output", 12, ""), ("Output", 13, "11"), ("Output", 16, "15"),
+        ("Output", 22, "21"), ("Output", 32, "31"), ("ContinuousStateDerivative", 6, "1"),
+        ("InitialUnknown", 2, "1"), ("InitialUnknown", 6, "1"), ("InitialUnknown", 12, ""), ("InitialUnknown", 13, "11"),
+        ("InitialUnknown", 16, "15"), ("InitialUnknown", 22, "21"), ("InitialUnknown", 32, "31")))
+
+
+def typed_stair3_description(identifier: str) -> str:
+    common = f'modelIdentifier="{identifier}" canGetAndSetFMUState="true" canSerializeFMUState="true"'
+    return f"""<?xml version="1.0" encoding="UTF-8"?>
+<fmiModelDescription fmiVersion="3.0" modelName="TypedStair3" instantiationToken="{{6f1c2b7e-typed-stair-0003}}"
+    generationTool="shapefmu tests" variableNamingConvention="flat">
+  <ModelExchange {common}/>
+  <CoSimulation {common} canHandleVariableCommunicationStepSize="true" hasEventMode="false"/>
+  <TypeDefinitions>
+    <EnumerationType name="Direction">
+      <Item name="up" value="1"/>
+      <Item name="down" value="2"/>
+    </EnumerationType>
+  </TypeDefinitions>
+  <ModelVariables>{_TYPED_STAIR3_VARIABLES}  </ModelVariables>
+  <ModelStructure>
+{_TYPED_STAIR3_STRUCTURE}  </ModelStructure>
+</fmiModelDescription>
+"""
+
+
+def build_typed_stair3(directory: Path) -> Path:
+    """The TypedStair3 FMU (FMI 3.0, see tests/fmus_c/typed_stair3.c) in ``directory``."""
+    include = Path(str(resources.files("shapefmu.fmi.native") / "c"))
+    return compile_fmu(HERE / "typed_stair3.c", typed_stair3_description("TypedStair3"), "TypedStair3",
+                       Path(directory) / "TypedStair3.fmu", include, fmpy.platform_tuple)

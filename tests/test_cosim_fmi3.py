@@ -93,3 +93,68 @@ def test_an_fmi3_parameter_error_names_the_component_and_the_call(fmus):
     with pytest.raises(CosimError, match=r"component 'plant' \(DiskDrive3.fmu\): fmi3SetFloat64\(f\[1\]=-1.0\) returned "
                                          r"fmi3Error.*parameter f\[1\] must be > 0, got -1"):
         simulate(System().add("plant", fmus["plant3"], {"f[1]": -1.0}), 1e-4, 1e-5)
+
+
+# ---------------------------------------------------------------------------------------------
+# every type across versions: TypedStair (FMI 2.0) and TypedStair3 (FMI 3.0), one model
+
+TYPED_RECORD = ["a.counter", "a.n_out", "a.e_out", "a.b_out", "a.s_out", "a.x_out", "a.level",
+                "b.counter", "b.n_out", "b.e_out", "b.b_out", "b.s_out", "b.x_out", "b.level"]
+
+
+@pytest.fixture(scope="module")
+def stairs(tmp_path_factory):
+    from c_fmus import build_typed_stair, build_typed_stair3
+
+    folder = tmp_path_factory.mktemp("stairs")
+    return {"2": build_typed_stair(folder), "3": build_typed_stair3(folder)}
+
+
+def typed_pair(stairs, a: str, b: str, strings: bool = True) -> System:
+    system = (System("typed").add("a", stairs[a], {"increment": 3, "mode": "down", "negate": True, "label": "A",
+                                                   "x_in": 0.5, "period": 0.25})
+              .add("b", stairs[b], {"label": "B"})
+              .connect("a.counter", "b.n_in").connect("a.e_out", "b.e_in").connect("a.b_out", "b.b_in")
+              .connect("a.x_out", "b.x_in"))
+    return system.connect("a.s_out", "b.s_in") if strings else system
+
+
+@pytest.mark.parametrize("versions", ["23", "32", "33"])
+def test_every_type_crosses_between_fmi2_and_fmi3_components_unchanged(stairs, versions):
+    want = simulate(typed_pair(stairs, "2", "2"), 2.0, 0.125, record=TYPED_RECORD)
+    got = simulate(typed_pair(stairs, *versions), 2.0, 0.125, record=TYPED_RECORD)
+    assert got["a.b_out"].dtype == np.bool_ and got["a.s_out"].tolist()[-1] == "A:"
+    assert np.ptp(want["b.n_out"]) > 0 and want["b.s_out"].tolist()[-1] == "B:A:"
+    for name in TYPED_RECORD:
+        assert got[name].tolist() == want[name].tolist(), name
+
+
+@pytest.mark.parametrize("versions", ["23", "32"])
+def test_numeric_fmi3_connections_run_in_the_compiled_loop_bit_for_bit(stairs, versions):
+    record = [r for r in TYPED_RECORD if "s_out" not in r]
+    results = {}
+    for native in (True, False):
+        with Master(typed_pair(stairs, *versions, strings=False), 0.1, native=native, record=record) as master:
+            assert master.loop_kind == ("C" if native else "Python"), master.loop_reason
+            results[native] = master.run(2.35)
+    assert results[True].tobytes() == results[False].tobytes()
+    want = simulate(typed_pair(stairs, "2", "2", strings=False), 2.35, 0.1, record=record)
+    for name in record:
+        assert results[True][name].tolist() == want[name].tolist(), name
+
+
+@pytest.mark.parametrize("interface", ["CoSimulation", "ModelExchange"])
+@pytest.mark.parametrize("native", [True, False], ids=["C", "Python"])
+def test_an_fmi3_fmu_ending_the_simulation_ends_the_run_as_the_fmi2_one_does(stairs, interface, native):
+    results = {}
+    for version in ("2", "3"):
+        system = System().add("s", stairs[version], {"stop_at": 2.3, "period": 0.5, "x_in": -1.5, "increment": 2})
+        with Master(system, 0.25, native=native, record=["s.counter", "s.level"],
+                    model_exchange=["s"] if interface == "ModelExchange" else None) as master:
+            results[version] = master.run(5.0)
+            termination = master.termination
+        assert termination.component == "s" and termination.time == pytest.approx(2.3, abs=1e-12)
+        assert termination.call.startswith(f"fmi{version}")
+    assert results["3"]["time"][-1] == pytest.approx(2.3, abs=1e-12)
+    for name in ("time", "s.counter", "s.level"):
+        np.testing.assert_allclose(results["3"][name], results["2"][name], rtol=0, atol=1e-12, err_msg=name)
