@@ -1,4 +1,4 @@
-"""The master algorithm: fixed macro steps over an SSP system of FMI 2.0 FMUs.
+"""The master algorithm: fixed macro steps over an SSP system of FMI 2.0 and FMI 3.0 FMUs.
 
 Communication semantics (``t_k = t0 + k*h``; the last step is shortened to end exactly at stop):
 
@@ -32,6 +32,14 @@ Communication semantics (``t_k = t0 + k*h``; the last step is shortened to end e
   last one cut at the stop time), and its outputs are passed on when it has reached the others'
   time, as libcosim's decimation factor does.
 * Model Exchange components are integrated by the master (see :mod:`shapefmu.cosim.units`).
+* Values of every type travel (Real/Float64, Integer and the FMI 3.0 integer types, Boolean,
+  String, Enumeration; see :mod:`.types`); parameters are typed by the model description, so the
+  text of a command line (``"zvd"``, ``"true"``, an Enumeration item) sets them. Results have a
+  typed column per recorded variable.
+* An FMU may ask to end the simulation (FMI 2.0 Co-Simulation: fmi2Discard and fmi2Terminated;
+  FMI 3.0: terminateSimulation; Model Exchange: terminateSimulation at an event). That is a normal
+  end: the other components finish the macro step, the row at the requested time is recorded and
+  ``Master.termination`` says who asked and when. Any other failed call raises CosimError.
 
 Speed: the per-step work is generated once for the system (no per-step dispatch on component
 kinds), as a C loop where the system allows, else as a Python function calling the FMUs' C
@@ -76,7 +84,7 @@ class Master:
     step : float
         Macro (communication) step in s.
     algorithm : "gauss-seidel" | "jacobi"
-    record : list of "component.variable", default every Real output of every component.
+    record : list of "component.variable", default every scalar output of every component.
     output_interval : float, default ``step``; must be a whole multiple of ``step``.
     step_multiples : {"component": m}, m >= 1: that component steps by ``m*step``.
     model_exchange : components to run through their Model Exchange interface.
@@ -85,7 +93,8 @@ class Master:
     progress : print a progress bar on stderr.
     native : run the per-step loop compiled in C (see :mod:`.step_program`) where the system allows
         it: no Model Exchange component, no algebraic loop, a C compiler on the machine. The
-        results are bit-identical to the Python loop's; ``loop_kind`` says which one runs.
+        results are bit-identical to the Python loop's; ``loop_kind`` says which one runs and
+        ``loop_reason`` why the Python one does (a String connection, a Model Exchange component...).
     """
 
     def __init__(self, system_or_path, step: float, *, algorithm: str = "gauss-seidel", record: list[str] | None = None,
@@ -282,7 +291,9 @@ class Master:
         """Initialise, step to ``stop_time`` and return the recorded results (structured array).
 
         ``parameters`` ({"component.variable": value}) apply to this run only, after the system's
-        parameter bindings. A second call starts again from a reset (see :meth:`reset`).
+        parameter bindings; values (or their text) are typed by each variable's declared type. A
+        second call starts again from a reset (see :meth:`reset`). A run that an FMU ended early
+        returns the rows up to that time, and ``termination`` says who ended it.
         """
         if self._state == "closed":
             raise ValueError("this Master is closed")

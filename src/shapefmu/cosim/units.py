@@ -108,6 +108,8 @@ class Unit:
     real = "Real"  # the family of floating-point variables, which the fast paths move
     family_table = FAMILIES_2
     terminated_at: float | None = None  # set when the FMU asks to end the simulation
+    state_calls = ("fmi2GetFMUstate", "fmi2SetFMUstate", "fmi2FreeFMUstate")  # FMI 3.0 spells them FMUState
+    queues = _MESSAGE_QUEUES  # where the process-wide logger finds this unit's messages
 
     def __init__(self, name: str, fmu_path: Path, unzip_directory: str, description):
         self.name = name
@@ -275,10 +277,12 @@ class Unit:
         return True
 
     def save_state(self) -> None:
-        self.check(self.fmu.dll.fmi2GetFMUstate(self.c, byref(self._state)), "fmi2GetFMUstate")
+        call = self.state_calls[0]
+        self.check(getattr(self.fmu.dll, call)(self.c, byref(self._state)), call)
 
     def restore_state(self) -> None:
-        self.check(self.fmu.dll.fmi2SetFMUstate(self.c, self._state), "fmi2SetFMUstate")
+        call = self.state_calls[1]
+        self.check(getattr(self.fmu.dll, call)(self.c, self._state), call)
 
     def _call(self, call: str, function, *args, **kwargs):
         try:
@@ -292,14 +296,14 @@ class Unit:
         if self.fmu is None:
             return
         if self._state:
-            self.fmu.dll.fmi2FreeFMUstate(self.c, byref(self._state))
+            getattr(self.fmu.dll, self.state_calls[2])(self.c, byref(self._state))
         try:
             self.fmu.terminate()
         except Exception:  # noqa: BLE001 - terminating after an error may itself fail; free anyway
             pass
         self.fmu.freeInstance()
         self.fmu = None
-        _MESSAGE_QUEUES.pop(id(self.messages), None)
+        self.queues.pop(id(self.messages), None)
 
 
 def _raw(dll, name: str):

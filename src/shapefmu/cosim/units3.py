@@ -48,6 +48,8 @@ class Unit3(Unit):
     prefix = "fmi3"
     real = "Float64"
     family_table = FAMILIES_3
+    state_calls = ("fmi3GetFMUState", "fmi3SetFMUState", "fmi3FreeFMUState")
+    queues = _QUEUES
 
     def __init__(self, name: str, fmu_path: Path, unzip_directory: str, description):
         self.name = name
@@ -112,25 +114,6 @@ class Unit3(Unit):
 
     def stop_or_fail(self, t: float, h: float, status: int) -> bool:
         raise FMUFailure(self, "fmi3DoStep", status, time=t)
-
-    def save_state(self) -> None:
-        self.check(self.fmu.dll.fmi3GetFMUState(self.c, byref(self._state)), "fmi3GetFMUState")
-
-    def restore_state(self) -> None:
-        self.check(self.fmu.dll.fmi3SetFMUState(self.c, self._state), "fmi3SetFMUState")
-
-    def free(self) -> None:
-        if self.fmu is None:
-            return
-        if self._state:
-            self.fmu.dll.fmi3FreeFMUState(self.c, byref(self._state))
-        try:
-            self.fmu.terminate()
-        except Exception:  # noqa: BLE001 - terminating after an error may itself fail; free anyway
-            pass
-        self.fmu.freeInstance()
-        self.fmu = None
-        _QUEUES.pop(id(self.messages), None)
 
 
 class ModelExchangeUnit3(ModelExchangeUnit, Unit3):

@@ -84,7 +84,7 @@ def _without_strings(name: str, component, values: dict) -> dict:
         elif str(value) != (connector.start or ""):
             raise ValueError(f"target 'omsimulator': OMSimulator does not import String parameter bindings, and "
                              f"{name}.{key} = {value!r} differs from the FMU's start value {connector.start!r}; "
-                             f"build the FMU with that start value (shapefmu build ... {key}={value})")
+                             f"build the FMU with that start value baked in (build_fmu(..., {key}={value!r}))")
     return kept
 
 
