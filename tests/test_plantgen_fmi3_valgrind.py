@@ -9,10 +9,9 @@ directional derivatives.
 """
 
 import shutil
-import subprocess
-import zipfile
 
 import pytest
+from test_plantgen_valgrind import run_driver_under_valgrind
 
 DRIVER = r"""
 #include <math.h>
@@ -115,17 +114,4 @@ def test_valgrind_finds_no_invalid_access_and_no_leak_in_an_fmi3_plant(tmp_path,
     from shapefmu.fmi.native import build_plant_fmu, model_from_file
 
     fmu = build_plant_fmu(model_from_file(model), tmp_path / "Plant3.fmu", fmi_version="3.0")
-    with zipfile.ZipFile(fmu) as archive:
-        archive.extractall(tmp_path)
-    sources = tmp_path / "sources"
-    (tmp_path / "driver.c").write_text(DRIVER)
-    program = tmp_path / "driver"
-    subprocess.run(["gcc", "-g", "-O1", "-std=c99", "-I", str(sources), str(tmp_path / "driver.c"),
-                    *map(str, sorted(sources.glob("*.c"))), "-o", str(program), "-lm"], check=True)
-    completed = subprocess.run(
-        ["valgrind", "--tool=memcheck", "--leak-check=full", "--show-leak-kinds=definite,indirect,possible",
-         "--errors-for-leak-kinds=definite,indirect,possible", "--error-exitcode=99", str(program)],
-        capture_output=True, text=True, timeout=120)
-    assert completed.returncode == 0, completed.stderr[-3000:] + completed.stdout
-    assert completed.stdout.startswith("ok ")
-    assert "ERROR SUMMARY: 0 errors" in completed.stderr
+    run_driver_under_valgrind(fmu, DRIVER, tmp_path / "run")

@@ -243,10 +243,10 @@ class Unit:
         self._call("fmi2EnterInitializationMode", self.fmu.enterInitializationMode)
 
     def exit_initialization(self, start_time: float, tolerance: float) -> None:
-        self._call("fmi2ExitInitializationMode", self.fmu.exitInitializationMode)
+        self._call(f"{self.prefix}ExitInitializationMode", self.fmu.exitInitializationMode)
 
     def reset(self) -> None:
-        self._call("fmi2Reset", self.fmu.reset)
+        self._call(f"{self.prefix}Reset", self.fmu.reset)
         self.terminated_at = None
 
     def step(self, t: float, h: float) -> bool:

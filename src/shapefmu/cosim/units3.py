@@ -89,13 +89,6 @@ class Unit3(Unit):
     def enter_initialization(self) -> None:
         self._call("fmi3EnterInitializationMode", self.fmu.enterInitializationMode, startTime=self._start_time)
 
-    def exit_initialization(self, start_time: float, tolerance: float) -> None:
-        self._call("fmi3ExitInitializationMode", self.fmu.exitInitializationMode)
-
-    def reset(self) -> None:
-        self._call("fmi3Reset", self.fmu.reset)
-        self.terminated_at = None
-
     def step(self, t: float, h: float) -> bool:
         """One fmi3DoStep; True when the FMU asked to end the simulation (``terminated_at``)."""
         event, terminate, early, last = self._flags
