@@ -61,7 +61,8 @@ from shapefmu.cosim import step_program
 from shapefmu.cosim.errors import AlgebraicLoopError, CosimError, CosimInterrupted, Termination
 from shapefmu.cosim.graph import Stage, _feeds_through, output_dependencies, schedule
 from shapefmu.cosim.types import enumeration_items, kind_of, typed_value
-from shapefmu.cosim.units import FMUFailure, load_units
+from shapefmu.cosim.loading import load_units
+from shapefmu.cosim.units import FMUFailure
 from shapefmu.fmi.ssp import System, read_ssp
 
 ALGORITHMS = ("gauss-seidel", "jacobi")

@@ -19,7 +19,7 @@ import math
 from ctypes import byref, c_double, c_int, c_size_t, c_uint, c_void_p
 from pathlib import Path
 
-from fmpy import calloc, extract, free, read_model_description
+from fmpy import calloc, free
 from fmpy.fmi2 import (
     FMU2Model,
     FMU2Slave,
@@ -426,42 +426,3 @@ class ModelExchangeUnit(Unit):
         super().restore_state()
         self.time = self._saved_time
         self._held = None  # re-initialise the integrator at the restored point
-
-
-def load_units(components: list[tuple[str, Path]], model_exchange: set[str]) -> tuple[list[Unit], list[str]]:
-    """Instantiate every (name, fmu) pair; each FMU file is extracted once and shared by its instances."""
-    extracted: dict[Path, tuple[str, object]] = {}
-    units, folders = [], []
-    try:
-        for name, fmu in components:
-            fmu = Path(fmu).resolve()
-            if fmu not in extracted:
-                description = read_model_description(str(fmu), validate=False)
-                folder = extract(str(fmu))
-                folders.append(folder)
-                extracted[fmu] = (folder, description)
-            folder, description = extracted[fmu]
-            if description.fmiVersion == "2.0":
-                cs, me = Unit, ModelExchangeUnit
-            elif description.fmiVersion.startswith("3."):
-                from shapefmu.cosim.units3 import ModelExchangeUnit3, Unit3
-
-                cs, me = Unit3, ModelExchangeUnit3
-            else:
-                raise ValueError(f"component {name!r}: {fmu.name} is FMI {description.fmiVersion}; the master runs FMI 2.0 and 3.0")
-            if name in model_exchange:
-                if description.modelExchange is None:
-                    raise ValueError(f"component {name!r}: {fmu.name} has no Model Exchange interface")
-                units.append(me(name, fmu, folder, description))
-            elif description.coSimulation is not None:
-                units.append(cs(name, fmu, folder, description))
-            elif description.modelExchange is not None:
-                units.append(me(name, fmu, folder, description))
-            else:
-                raise ValueError(f"component {name!r}: {fmu.name} has neither a Co-Simulation nor a Model Exchange interface")
-    except BaseException:
-        for unit in units:
-            unit.free()
-        raise
-    return units, folders
-
