@@ -4,7 +4,7 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test bench examples clean
+.PHONY: demo test bench examples clean system-packages
 
 $(PY):
 	$(PYTHON) -m venv $(VENV)
@@ -22,7 +22,11 @@ demo: $(STAMP)
 	$(PY) -m shapefmu compare models/disk_drive.toml --distance 0.05 --plot results/compare_disk_drive.png
 	@echo "demo outputs: FMUs in fmus/, plots in results/ (compare_disk_drive*.png)"
 
-test: $(STAMP)
+# Debian packages the tests need (oneTBB for ecospy, gcc, valgrind), installed when missing.
+system-packages:
+	@bash .ci/system-packages
+
+test: $(STAMP) system-packages
 	$(PY) -m pytest -q
 
 # Every paper's script: the design layer's (examples/<topic>.py) and the FMU path's (paper00*_fmu.py).

@@ -28,7 +28,7 @@ from shapefmu.fmi.native.build import build_plant_fmu
 from shapefmu.fmi.ssp import System
 from shapefmu.plants import load
 from shapefmu.shapers.twin_pulse import m_bc_tz_tp
-from shapefmu.sweep_analytic import pendula_swing
+from shapefmu.sweep.analytic import pendula_swing
 
 MODEL = Path(__file__).resolve().parents[1] / "models" / "ten_pendula.toml"
 STEP, STOP = 0.01, 12.0

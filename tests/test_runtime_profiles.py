@@ -330,7 +330,7 @@ def test_shaped_bang_bang_equals_the_design_layers_shaped_command_and_its_exact_
     reference = Command((0.0, half, 2 * half), (11.0, -11.0)).shaped(shaper)
     np.testing.assert_allclose(move.breaks, reference.breaks, rtol=0, atol=1e-15)
     np.testing.assert_allclose(move.levels, reference.levels, rtol=1e-12, atol=1e-12)
-    # Position and velocity between breaks against the matrix-exponential simulation of optimal.py.
+    # Position and velocity between breaks against the matrix-exponential simulation of optimal/.
     t = np.linspace(0.0, 1.2 * move.breaks[-1], 97)
     _, states = simulate(DOUBLE_INTEGRATOR, reference, t)
     got = np.array([move.state(x)[:2] for x in t])

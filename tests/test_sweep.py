@@ -21,7 +21,7 @@ from shapefmu.cli import main  # noqa: E402
 from shapefmu.cosim import Master  # noqa: E402
 from shapefmu.plants import load  # noqa: E402
 from shapefmu.shapers.twin_pulse import m_bc_tz_tp  # noqa: E402
-from shapefmu.sweep_analytic import pendula_swing, shaper_residual  # noqa: E402
+from shapefmu.sweep.analytic import pendula_swing, shaper_residual  # noqa: E402
 
 TEN_PENDULA = Path(__file__).resolve().parents[1] / "models" / "ten_pendula.toml"
 STEP, STOP = 0.01, 12.0

@@ -1,5 +1,9 @@
 """Plant models: linear models with named signals and physical parameters (``Plant``), the plants
-of the papers (``library``) and the declarative model files of ``models/`` (``loader``)."""
+of the papers (``library``) and the declarative model files of ``models/`` (``loader``).
+
+Design layer: imports ``runtime`` and numpy / scipy / python-control; arrows run
+loader -> library -> model.
+"""
 
 from shapefmu.plants.library import (
     disk_drive,

@@ -1,7 +1,8 @@
 """Shaper designs: impulse shapers, window shape filters, twin-pulse and time-frequency profiles.
 
 Single-mode designs share one signature, ``design(omega, zeta, ...)`` with omega in rad/s;
-multi-mode designs take a sequence of ``(omega, zeta)`` modes.
+multi-mode designs take a sequence of ``(omega, zeta)`` modes. Design layer: imports ``runtime``
+(whose formulas the FMUs re-run) and numpy / scipy, nothing above.
 """
 
 from shapefmu.shapers.catalog import KINDS, design

@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+from shapefmu.cli.arguments import parse_mode
 from shapefmu.fmi.python.builder import build_all, build_fmu
 from shapefmu.fmi.python.slaves.shaper import KINDS, MAX_MODES
 
@@ -30,8 +31,6 @@ def _build_all(args):
 
 
 def _add_shaper(parser):
-    from shapefmu.cli import parse_mode
-
     parser.add_argument("--kind", choices=KINDS, default="zvd", help="shaper design (default zvd)")
     parser.add_argument("--mode", type=parse_mode, action="append", required=True, metavar="HZ[:ZETA]",
                         help=f"mode frequency in Hz and damping ratio; up to {MAX_MODES}")
@@ -76,7 +75,6 @@ def _build_reference(args):
 
 
 def _add_shape_filter(parser):
-    from shapefmu.cli import parse_mode
     from shapefmu.fmi.python.slaves.shape_filter import BASES, KINDS as FILTER_KINDS
 
     parser.add_argument("--kind", choices=FILTER_KINDS, default="hanning", help="filter design (default hanning)")
@@ -110,7 +108,7 @@ TARGETS = {
 }
 
 
-def add_build_command(commands) -> None:
+def register(commands) -> None:
     """Register ``build`` and its targets on the main parser's subcommands."""
     p = commands.add_parser("build", help="build FMUs (default: all of them into fmus/)")
     _add_all(p)

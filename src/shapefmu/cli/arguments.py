@@ -1,0 +1,44 @@
+"""Argument parsers shared by the command modules (modes in Hz, design and sampling options).
+
+Imported by the command modules of this package, never the other way.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+
+from shapefmu.shapers import KINDS
+
+
+def parse_mode(text: str) -> tuple[float, float]:
+    """``"2000"`` or ``"2000:0.01"`` (Hz, damping ratio) -> (omega rad/s, zeta)."""
+    hz_text, _, zeta_text = text.partition(":")
+    try:
+        hz = float(hz_text)
+        zeta = float(zeta_text) if zeta_text else 0.0
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"--mode must be HZ or HZ:ZETA, e.g. 2000:0.01, got {text!r}") from None
+    if not (math.isfinite(hz) and hz > 0):
+        raise argparse.ArgumentTypeError(f"--mode frequency must be > 0 Hz, got {hz_text!r}")
+    if not (math.isfinite(zeta) and 0 <= zeta < 1):
+        raise argparse.ArgumentTypeError(f"--mode damping ratio must be in [0, 1), got {zeta_text!r}")
+    return 2.0 * math.pi * hz, zeta
+
+
+def add_design_arguments(parser: argparse.ArgumentParser, kinds=KINDS) -> None:
+    """KIND, --mode (repeatable), --vtol and --n: what an impulse-shaper design takes."""
+    parser.add_argument("kind", choices=kinds, help="shaper design")
+    parser.add_argument(
+        "--mode", type=parse_mode, action="append", required=True, metavar="HZ[:ZETA]",
+        help="mode frequency in Hz and damping ratio; repeat for several modes",
+    )
+    parser.add_argument("--vtol", type=float, default=0.05, help="tolerable vibration of the EI family (default 0.05)")
+    parser.add_argument("--n", type=int, default=1, help="derivative order of zv_dn (0 = ZV, 1 = ZVD, ...)")
+
+
+def add_sampling_arguments(parser: argparse.ArgumentParser) -> None:
+    """--order, --ts and --adjust-ts: what a sampled window filter takes."""
+    parser.add_argument("--order", type=int, default=1, help="robustness order of window filters (default 1)")
+    parser.add_argument("--ts", type=float, help="sampling period in s (window default: pi/(100 omega_d))")
+    parser.add_argument("--adjust-ts", action="store_true", help="use the nearest ts that makes M an integer")

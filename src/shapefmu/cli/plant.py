@@ -1,0 +1,33 @@
+"""``shapefmu plant show`` and ``plant build``: plant models and their native FMUs.
+"""
+
+from __future__ import annotations
+
+
+def _cmd_plant_show(args) -> int:
+    from shapefmu.plants import describe
+
+    print(describe(args.file))
+    return 0
+
+
+def _cmd_plant_build(args) -> int:
+    from shapefmu.fmi.native import build_plant_fmu, model_from_file
+
+    model = model_from_file(args.file)
+    if model is None:
+        raise ValueError(f"{args.file} defines no plant() function")
+    print(f"plant FMU written to {build_plant_fmu(model, args.output)}")
+    return 0
+
+
+def register(commands) -> None:
+    p = commands.add_parser("plant", help="plant models (models/*.toml)")
+    plant_commands = p.add_subparsers(dest="plant_command", required=True)
+    q = plant_commands.add_parser("show", help="print a plant model's signals, parameters and modes")
+    q.add_argument("file", help="plant model file, e.g. models/disk_drive.toml")
+    q.set_defaults(run=_cmd_plant_show)
+    q = plant_commands.add_parser("build", help="generate and compile a native FMI 2.0 ME + CS plant FMU")
+    q.add_argument("file", help="plant model: models/*.toml, or a .py file defining plant() (models/pendulum.py)")
+    q.add_argument("-o", "--output", required=True, metavar="FMU", help="FMU to write, e.g. fmus/DiskDrive.fmu")
+    q.set_defaults(run=_cmd_plant_build)

@@ -1,0 +1,91 @@
+"""``shapefmu simulate`` and ``compare``: SSP systems of FMUs run by the co-simulation master.
+"""
+
+from __future__ import annotations
+
+import sys
+
+import numpy as np
+
+
+def _cmd_simulate(args) -> int:
+    from shapefmu.cosim import CosimError, CosimInterrupted, Master, save_results
+
+    parameters = {}
+    for item in args.set:
+        name, _, value = item.partition("=")
+        try:
+            parameters[name] = float(value)
+        except ValueError:
+            raise ValueError(f"--set must be component.variable=NUMBER, got {item!r}") from None
+    with Master(args.system, args.step, algorithm=args.algorithm, record=args.record, output_interval=args.output_interval,
+                model_exchange=args.model_exchange, progress=args.progress) as master:
+        try:
+            results, status = master.run(args.stop, parameters=parameters), 0
+        except (CosimError, CosimInterrupted) as error:
+            print(f"shapefmu simulate: {error}", file=sys.stderr)
+            results, status = error.partial, (130 if isinstance(error, CosimInterrupted) else 1)
+    if results is None:
+        return status
+    last = results[-1]
+    print(f"{len(results)} records to t = {last['time']:.9g} s")
+    for name in results.dtype.names[1:]:
+        print(f"  {name:30s} final {last[name]: .9g}   peak |.| {np.max(np.abs(results[name])):.6g}")
+    if args.out:
+        print(f"results written to {save_results(results, args.out)}")
+    if args.plot:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        names = results.dtype.names[1:]
+        figure, axes = plt.subplots(len(names), 1, sharex=True, figsize=(8, 2 + 1.6 * len(names)), squeeze=False)
+        for axis, name in zip(axes[:, 0], names):
+            axis.plot(results["time"], results[name])
+            axis.set_ylabel(name)
+        axes[-1, 0].set_xlabel("time [s]")
+        figure.tight_layout()
+        figure.savefig(args.plot)
+        print(f"plot written to {args.plot}")
+    return status
+
+
+def _cmd_compare(args) -> int:
+    from shapefmu.cosim.compare import compare
+
+    comparison = compare(args.file, args.distance, candidates=args.candidate or None, step=args.step, cache=args.fmus,
+                         u_max=args.u_max, tolerance=args.tolerance, plot=args.plot)
+    print(comparison.table())
+    if args.plot:
+        print(f"plot written to {args.plot}")
+    return 0
+
+
+def register(commands) -> None:
+    p = commands.add_parser("simulate", help="run an SSP system of FMUs with the co-simulation master")
+    p.add_argument("system", help="SSP system (.ssp archive or .ssd file)")
+    p.add_argument("--stop", type=float, required=True, help="stop time in s")
+    p.add_argument("--step", type=float, required=True, help="macro (communication) step in s")
+    p.add_argument("--record", action="append", metavar="COMP.VAR", help="variable to record; repeat (default: every output)")
+    p.add_argument("--output-interval", type=float, help="record every this many s (a multiple of --step)")
+    p.add_argument("--algorithm", choices=("gauss-seidel", "jacobi"), default="gauss-seidel", help="master algorithm")
+    p.add_argument("--model-exchange", action="append", metavar="COMP", help="integrate this component as Model Exchange")
+    p.add_argument("--set", action="append", default=[], metavar="COMP.VAR=VALUE", help="parameter for this run; repeat")
+    p.add_argument("--out", metavar="FILE", help="save the results as .csv or .parquet")
+    p.add_argument("--plot", metavar="PNG", help="plot every recorded variable against time")
+    p.add_argument("--progress", action="store_true", help="show a progress bar")
+    p.set_defaults(run=_cmd_simulate)
+
+    from shapefmu.cosim.compare import CANDIDATES
+
+    p = commands.add_parser("compare", help="one plant, every candidate command, co-simulated as FMUs side by side")
+    p.add_argument("file", help="plant model in the form of eq. (1) of paper 002, e.g. models/disk_drive.toml")
+    p.add_argument("--distance", type=float, required=True, help="move distance of the rigid body")
+    p.add_argument("--candidate", action="append", choices=CANDIDATES, help="candidate to run; repeat (default: all)")
+    p.add_argument("--step", type=float, default=1e-6, help="macro step and sampling period of every FMU in s (default 1e-6)")
+    p.add_argument("--fmus", default="fmus", help="folder where the FMUs are built and reused (default fmus)")
+    p.add_argument("--u-max", type=float, default=None, help="input limit (default: the input's limit in the file)")
+    p.add_argument("--tolerance", type=float, default=1e-3, help="settling band of the move time, relative to X and U")
+    p.add_argument("--plot", metavar="PNG", help="save u, position error and deflection of every candidate")
+    p.set_defaults(run=_cmd_compare)
