@@ -114,11 +114,11 @@ def test_the_last_step_of_omsimulators_run_is_a_sample_reached_not_skipped(built
 RANDOM_STEPS = 100_000
 
 
-def _random_run(c_host, tmp_path, fmu, ts, steps, seed, *signal):
+def _random_run(c_host, tmp_path, fmu, ts, steps, seed, *options):
     """``steps`` random steps in [1e-9 Ts, 7.3 Ts] (a third of them onto the grid): rows of the CSV."""
     csv = tmp_path / "random.csv"
     result = run_host(c_host, [fmu_arguments(fmu, tmp_path / "fmu")], "--random", seed, 1e-9 * ts, 7.3 * ts, steps, ts,
-                      "--period", 50 * ts, *signal, "--csv", csv)
+                      "--period", 50 * ts, *options, "--csv", csv)
     assert result.returncode == 0, result.stderr[-3000:]
     rows = host_rows(csv)[(0, 0, 0)]
     steps_taken = np.diff(rows[:, 0])
@@ -131,15 +131,22 @@ def _shaper_taps():
     return design("zvd", [(2 * math.pi * 10.0, 0.0)]).on_grid(1e-3).taps
 
 
-def _assert_fir_matches(rows, ts, taps, u0=0.0):
-    run = SampledRun(rows[:, 0], rows[:, 1], ts)
+def _assert_fir_matches(rows, ts, taps, t0=0.0):
+    run = SampledRun(rows[:, 0], rows[:, 1], ts, t0)
     assert 0.2 < run.on_grid.mean() < 0.8  # the run stood both on the grid and between samples
-    np.testing.assert_allclose(rows[:, 2], run.fir(taps, u0), rtol=0, atol=1e-12)
+    np.testing.assert_allclose(rows[:, 2], run.fir(taps), rtol=0, atol=1e-12)
 
 
 def test_shaper_output_at_random_steps_is_the_sampled_design_held_between_samples(built, c_host, tmp_path):
     rows = _random_run(c_host, tmp_path, built["Shaper"], 1e-3, RANDOM_STEPS, 1)
     _assert_fir_matches(rows, 1e-3, _shaper_taps())
+
+
+def test_samples_are_counted_from_the_start_time_of_the_experiment(built, c_host, tmp_path):
+    start = 0.3705  # not on the grid k Ts from 0: the grid is start + k Ts
+    rows = _random_run(c_host, tmp_path, built["Shaper"], 1e-3, 5000, 5, "--start", start)
+    assert rows[0, 0] == start
+    _assert_fir_matches(rows, 1e-3, _shaper_taps(), t0=start)
 
 
 def test_feed_through_shape_filter_at_random_steps_is_the_sampled_design_held(feedthrough_filter_fmu, c_host, tmp_path):
