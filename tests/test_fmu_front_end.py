@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import ctypes.util
 import os
+import subprocess
 import sys
 import sysconfig
 from pathlib import Path
@@ -124,3 +125,25 @@ def test_a_recorded_libpython_that_is_gone_falls_back_to_the_soname(shaper_fmu, 
     u = rows[:, 1]
     expected = 0.5 * u + 0.5 * np.concatenate([np.full(50, SHAPER_STARTS["u0"]), u[:-50]])
     np.testing.assert_allclose(rows[:, 2], expected, rtol=0, atol=1e-12)
+
+
+def test_a_percent_sign_in_a_logged_path_reaches_a_printf_logger_verbatim(shaper_fmu, tmp_path):
+    # fmpy's logger formats the message like printf (as FMI 2.0 says); the resource URI of a folder
+    # named with %s and %n, which the front end refuses, must not be read as conversions.
+    script = (
+        "import sys\n"
+        "from fmpy import extract, read_model_description\n"
+        "from fmpy.fmi2 import FMU2Slave\n"
+        "md = read_model_description(sys.argv[1])\n"
+        "slave = FMU2Slave(guid=md.guid, unzipDirectory=extract(sys.argv[1], sys.argv[2]), modelIdentifier='Shaper')\n"
+        "try:\n"
+        "    slave.instantiate()\n"
+        "except Exception as error:\n"
+        "    print('refused:', type(error).__name__)\n"
+    )
+    folder = tmp_path / "odd %s%s%n name"
+    result = subprocess.run([sys.executable, "-c", script, str(shaper_fmu), str(folder)], capture_output=True,
+                            text=True, timeout=120)
+    assert result.returncode == 0, result.stderr[-3000:]
+    assert "refused:" in result.stdout
+    assert "odd%20%25s%25s%25n%20name/resources is not this FMU's resources directory" in result.stdout

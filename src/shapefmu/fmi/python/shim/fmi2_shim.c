@@ -56,9 +56,17 @@ typedef struct {
 
 static void host_log(const fmi2CallbackFunctions* f, fmi2String name, fmi2Status status, const char* message)
 {
-    if (f != NULL && f->logger != NULL) {
-        f->logger(f->componentEnvironment, name, status, status >= fmi2Error ? "logStatusError" : "logAll", message);
+    /* The host formats the message like printf (FMI 2.0): a '%' of a path or URI in it (%20) is
+     * doubled, or the host would read arguments that were never passed. */
+    char escaped[4096];
+    size_t n = 0;
+    if (f == NULL || f->logger == NULL) return;
+    for (; *message != '\0' && n + 2 < sizeof(escaped); message++) {
+        if (*message == '%') escaped[n++] = '%';
+        escaped[n++] = *message;
     }
+    escaped[n] = '\0';
+    f->logger(f->componentEnvironment, name, status, status >= fmi2Error ? "logStatusError" : "logAll", escaped);
 }
 
 static void shim_logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status, fmi2String category, fmi2String message, ...)
