@@ -17,7 +17,7 @@ def _cmd_plant_build(args) -> int:
     model = model_from_file(args.file)
     if model is None:
         raise ValueError(f"{args.file} defines no plant() function")
-    print(f"plant FMU written to {build_plant_fmu(model, args.output)}")
+    print(f"plant FMU written to {build_plant_fmu(model, args.output, fmi_version=args.fmi_version)}")
     return 0
 
 
@@ -27,7 +27,8 @@ def register(commands) -> None:
     q = plant_commands.add_parser("show", help="print a plant model's signals, parameters and modes")
     q.add_argument("file", help="plant model file, e.g. models/disk_drive.toml")
     q.set_defaults(run=_cmd_plant_show)
-    q = plant_commands.add_parser("build", help="generate and compile a native FMI 2.0 ME + CS plant FMU")
+    q = plant_commands.add_parser("build", help="generate and compile a native ME + CS plant FMU (FMI 2.0 or 3.0)")
     q.add_argument("file", help="plant model: models/*.toml, or a .py file defining plant() (models/pendulum.py)")
     q.add_argument("-o", "--output", required=True, metavar="FMU", help="FMU to write, e.g. fmus/DiskDrive.fmu")
+    q.add_argument("--fmi-version", choices=("2.0", "3.0"), default="2.0", help="FMI version of the FMU (default 2.0)")
     q.set_defaults(run=_cmd_plant_build)

@@ -13,11 +13,10 @@ def _cmd_simulate(args) -> int:
 
     parameters = {}
     for item in args.set:
-        name, _, value = item.partition("=")
-        try:
-            parameters[name] = float(value)
-        except ValueError:
-            raise ValueError(f"--set must be component.variable=NUMBER, got {item!r}") from None
+        name, equals, value = item.partition("=")
+        if not equals:
+            raise ValueError(f"--set must be component.variable=VALUE, got {item!r}")
+        parameters[name] = value  # typed by the model description: a number, true/false, an item, text
     with Master(args.system, args.step, algorithm=args.algorithm, record=args.record, output_interval=args.output_interval,
                 model_exchange=args.model_exchange, progress=args.progress) as master:
         try:
@@ -25,24 +24,31 @@ def _cmd_simulate(args) -> int:
         except (CosimError, CosimInterrupted) as error:
             print(f"shapefmu simulate: {error}", file=sys.stderr)
             results, status = error.partial, (130 if isinstance(error, CosimInterrupted) else 1)
+    if master.termination is not None:
+        print(f"shapefmu simulate: {master.termination}: a normal end", file=sys.stderr)
     if results is None:
         return status
     last = results[-1]
     print(f"{len(results)} records to t = {last['time']:.9g} s")
     for name in results.dtype.names[1:]:
-        print(f"  {name:30s} final {last[name]: .9g}   peak |.| {np.max(np.abs(results[name])):.6g}")
+        if results.dtype[name].kind in "fiu":
+            print(f"  {name:30s} final {last[name]: .9g}   peak |.| {np.max(np.abs(results[name])):.6g}")
+        else:
+            print(f"  {name:30s} final {last[name]!s}")
     if args.out:
         print(f"results written to {save_results(results, args.out)}")
-    if args.plot:
+    if args.plot and not any(results.dtype[name].kind in "fiub" for name in results.dtype.names[1:]):
+        print("no numeric variable recorded: no plot written")
+    elif args.plot:
         import matplotlib
 
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
 
-        names = results.dtype.names[1:]
+        names = [name for name in results.dtype.names[1:] if results.dtype[name].kind in "fiub"]  # no strings
         figure, axes = plt.subplots(len(names), 1, sharex=True, figsize=(8, 2 + 1.6 * len(names)), squeeze=False)
         for axis, name in zip(axes[:, 0], names):
-            axis.plot(results["time"], results[name])
+            axis.plot(results["time"], results[name], drawstyle="default" if results.dtype[name].kind == "f" else "steps-post")
             axis.set_ylabel(name)
         axes[-1, 0].set_xlabel("time [s]")
         figure.tight_layout()
@@ -71,7 +77,8 @@ def register(commands) -> None:
     p.add_argument("--output-interval", type=float, help="record every this many s (a multiple of --step)")
     p.add_argument("--algorithm", choices=("gauss-seidel", "jacobi"), default="gauss-seidel", help="master algorithm")
     p.add_argument("--model-exchange", action="append", metavar="COMP", help="integrate this component as Model Exchange")
-    p.add_argument("--set", action="append", default=[], metavar="COMP.VAR=VALUE", help="parameter for this run; repeat")
+    p.add_argument("--set", action="append", default=[], metavar="COMP.VAR=VALUE",
+                   help="parameter for this run, typed by the FMU (a number, true/false, an enumeration item, text); repeat")
     p.add_argument("--out", metavar="FILE", help="save the results as .csv or .parquet")
     p.add_argument("--plot", metavar="PNG", help="plot every recorded variable against time")
     p.add_argument("--progress", action="store_true", help="show a progress bar")

@@ -1,4 +1,4 @@
-"""Co-simulation master: SSP systems of FMI 2.0 FMUs stepped by fmpy underneath.
+"""Co-simulation master: SSP systems of FMI 2.0 and 3.0 FMUs stepped by fmpy underneath.
 
 ``Master(system_or_path, step, ...)`` runs a :class:`shapefmu.fmi.ssp.System` (or an .ssp/.ssd
 file) by fixed macro steps (Gauss-Seidel or Jacobi), integrates Model Exchange FMUs itself, solves
@@ -7,7 +7,7 @@ It may import ``shapefmu.fmi`` and the layers below (``compare`` uses the design
 ``sweep`` or ``cli``.
 """
 
-from shapefmu.cosim.errors import AlgebraicLoopError, CosimError, CosimInterrupted
+from shapefmu.cosim.errors import AlgebraicLoopError, CosimError, CosimInterrupted, Termination
 from shapefmu.cosim.master import ALGORITHMS, Master, save_results, simulate
 
-__all__ = ["ALGORITHMS", "AlgebraicLoopError", "CosimError", "CosimInterrupted", "Master", "save_results", "simulate"]
+__all__ = ["ALGORITHMS", "AlgebraicLoopError", "CosimError", "CosimInterrupted", "Master", "Termination", "save_results", "simulate"]

@@ -1,6 +1,21 @@
-"""Errors of the master algorithm."""
+"""Errors of the master algorithm, and the normal end an FMU may ask for."""
 
 from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class Termination:
+    """An FMU asked to end the simulation: ``component`` at ``time`` s, through ``call``
+    (e.g. "fmi2DoStep returned fmi2Discard and fmi2Terminated is true"). A normal end of the run."""
+
+    component: str
+    time: float
+    call: str
+
+    def __str__(self) -> str:
+        return f"component {self.component!r} ended the simulation at t = {self.time:.9g} s ({self.call})"
 
 
 class CosimError(RuntimeError):

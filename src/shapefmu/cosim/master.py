@@ -1,4 +1,4 @@
-"""The master algorithm: fixed macro steps over an SSP system of FMI 2.0 FMUs.
+"""The master algorithm: fixed macro steps over an SSP system of FMI 2.0 and FMI 3.0 FMUs.
 
 Communication semantics (``t_k = t0 + k*h``; the last step is shortened to end exactly at stop):
 
@@ -32,6 +32,14 @@ Communication semantics (``t_k = t0 + k*h``; the last step is shortened to end e
   last one cut at the stop time), and its outputs are passed on when it has reached the others'
   time, as libcosim's decimation factor does.
 * Model Exchange components are integrated by the master (see :mod:`shapefmu.cosim.units`).
+* Values of every type travel (Real/Float64, Integer and the FMI 3.0 integer types, Boolean,
+  String, Enumeration; see :mod:`.types`); parameters are typed by the model description, so the
+  text of a command line (``"zvd"``, ``"true"``, an Enumeration item) sets them. Results have a
+  typed column per recorded variable.
+* An FMU may ask to end the simulation (FMI 2.0 Co-Simulation: fmi2Discard and fmi2Terminated;
+  FMI 3.0: terminateSimulation; Model Exchange: terminateSimulation at an event). That is a normal
+  end: the other components finish the macro step, the row at the requested time is recorded and
+  ``Master.termination`` says who asked and when. Any other failed call raises CosimError.
 
 Speed: the per-step work is generated once for the system (no per-step dispatch on component
 kinds), as a C loop where the system allows, else as a Python function calling the FMUs' C
@@ -45,14 +53,14 @@ import shutil
 import sys
 import time as wallclock
 import weakref
-from ctypes import c_double
 from pathlib import Path
 
 import numpy as np
 
 from shapefmu.cosim import step_program
-from shapefmu.cosim.errors import AlgebraicLoopError, CosimError, CosimInterrupted
+from shapefmu.cosim.errors import AlgebraicLoopError, CosimError, CosimInterrupted, Termination
 from shapefmu.cosim.graph import Stage, _feeds_through, output_dependencies, schedule
+from shapefmu.cosim.types import enumeration_items, kind_of, typed_value
 from shapefmu.cosim.units import FMUFailure, load_units
 from shapefmu.fmi.ssp import System, read_ssp
 
@@ -76,7 +84,7 @@ class Master:
     step : float
         Macro (communication) step in s.
     algorithm : "gauss-seidel" | "jacobi"
-    record : list of "component.variable", default every Real output of every component.
+    record : list of "component.variable", default every scalar output of every component.
     output_interval : float, default ``step``; must be a whole multiple of ``step``.
     step_multiples : {"component": m}, m >= 1: that component steps by ``m*step``.
     model_exchange : components to run through their Model Exchange interface.
@@ -85,7 +93,8 @@ class Master:
     progress : print a progress bar on stderr.
     native : run the per-step loop compiled in C (see :mod:`.step_program`) where the system allows
         it: no Model Exchange component, no algebraic loop, a C compiler on the machine. The
-        results are bit-identical to the Python loop's; ``loop_kind`` says which one runs.
+        results are bit-identical to the Python loop's; ``loop_kind`` says which one runs and
+        ``loop_reason`` why the Python one does (a String connection, a Model Exchange component...).
     """
 
     def __init__(self, system_or_path, step: float, *, algorithm: str = "gauss-seidel", record: list[str] | None = None,
@@ -117,10 +126,6 @@ class Master:
         for name in model_exchange or ():
             if name not in self.system.components:
                 raise ValueError(f"model_exchange names unknown component {name!r} (components: {', '.join(names)})")
-        for c in self.system.connections:
-            if self.system.components[c.end_component].connectors[c.end_connector].type != "Real":
-                raise ValueError(f"connection {c.start} -> {c.end}: the master connects Real variables only")
-
         self.units, self._folders = load_units([(n, self.system.components[n].fmu) for n in names], set(model_exchange or ()))
         # Released by close(), or when the master is collected or the interpreter exits without
         # close(): weakref.finalize runs from an atexit hook while modules can still be used,
@@ -134,6 +139,7 @@ class Master:
             self.close()
             raise
         self._state = "instantiated"
+        self.termination: Termination | None = None
 
     # ----------------------------------------------------------------------------- set-up
     def _interval(self, output_interval):
@@ -160,7 +166,7 @@ class Master:
         system = self.system
         if record is None:
             record = [f"{u.name}.{v.name}" for u in self.units for v in u.description.modelVariables
-                      if v.causality == "output" and v.type == "Real"]
+                      if v.causality == "output" and kind_of(v) and not getattr(v, "shape", None)]
         self.record = list(record)
         inputs = {u.name: [] for u in self.units}
         reads = {u.name: [] for u in self.units}
@@ -168,7 +174,7 @@ class Master:
             inputs[c.end_component].append(c.end_connector)
             if c.start_connector not in reads[c.start_component]:
                 reads[c.start_component].append(c.start_connector)
-        self._record_sources = []
+        references = []
         for reference in self.record:
             component, variable = _split(reference, "record entry")
             if component not in self._unit:
@@ -176,15 +182,23 @@ class Master:
             self._unit[component].variable(variable)
             if variable not in reads[component]:
                 reads[component].append(variable)
-            self._record_sources.append((component, reads[component].index(variable)))
+            references.append((component, variable))
         for unit in self.units:
             unit.configure(inputs[unit.name], reads[unit.name])
-        # ops[name]: how each input of that component is computed from an output slot.
+        # (component, family, slot) of each recorded variable in its unit's read arrays
+        self._record_sources = [(c, *self._unit[c].read_slot[v]) for c, v in references]
+        # ops[name]: how each floating-point input of that component is computed from an output
+        # slot (the fast path, also used by loops); typed_ops: every other family.
         self._ops = {u.name: [] for u in self.units}
+        self._typed_ops = {u.name: [] for u in self.units}
         for c in system.connections:
-            source = self._unit[c.start_component]
-            self._ops[c.end_component].append(
-                (inputs[c.end_component].index(c.end_connector), source, reads[c.start_component].index(c.start_connector), c.factor, c.offset))
+            source, target = self._unit[c.start_component], self._unit[c.end_component]
+            f, d = target.input_slot[c.end_connector]
+            g, s = source.read_slot[c.start_connector]
+            if f == target.real and g == source.real:
+                self._ops[target.name].append((d, source, s, c.factor, c.offset))
+            else:
+                self._typed_ops[target.name].append((f, d, source, g, s, c.factor, c.offset))
         if self.algorithm == "jacobi":
             self.stages = [Stage([u.name]) for u in self.units]
         else:
@@ -210,19 +224,34 @@ class Master:
                     continue
                 unit = self._unit[stage.components[0]]
                 dependencies = output_dependencies(unit.description)
-                slots = {reads[unit.name].index(name) for name in reads[unit.name]
-                         if name in dependencies and _feeds_through(dependencies, name)}
-                if slots:
-                    self._early[unit.name] = (slots, (c_double * unit.n_out)())
+                early = {}
+                for name in reads[unit.name]:
+                    if name in dependencies and _feeds_through(dependencies, name):
+                        f, s = unit.read_slot[name]
+                        early.setdefault(f, set()).add(s)
+                if early:
+                    self._early[unit.name] = {f: (slots, (unit.channels[f].family.ctype * unit.channels[f].n_out)())
+                                              for f, slots in early.items()}
         self._tear_slots = [self._tears(stage) for stage in self._loops]
         self._run_chunk = self._compile()
+
+    def connection_ops(self, name: str) -> list[tuple]:
+        """Every input of component ``name`` as (family, index, source unit, source family, slot,
+        factor, offset): its value is the source's read value * factor + offset."""
+        unit = self._unit[name]
+        return ([(unit.real, d, source, source.real, s, f, o) for d, source, s, f, o in self._ops[name]]
+                + self._typed_ops[name])
 
     def _tears(self, stage):
         """For each torn input: (unit, input index, source unit, source slot, factor, offset)."""
         slots = []
         for component, connector in stage.tears:
             unit = self._unit[component]
-            d = unit.inputs.index(connector)
+            family, d = unit.input_slot[connector]
+            if family != unit.real:
+                raise AlgebraicLoopError(f"algebraic loop through {', '.join(stage.loop_variables)}: the master iterates "
+                                         f"on floating-point inputs only, and {component}.{connector} is {family}",
+                                         stage.loop_variables)
             for index, source, s, f, o in self._ops[component]:
                 if index == d:
                     slots.append((unit, d, source, s, f, o))
@@ -240,7 +269,8 @@ class Master:
         """``run_chunk(k0, k1, row, t0, h, t_stop, last, buf, every)`` for this system and scheme:
         the compiled C loop where the system allows it, else the generated Python one."""
         blocks = step_program.plan(self)
-        native = step_program.native_chunk(self, blocks) if self.native else None
+        self.loop_reason = step_program.python_only_reason(self, blocks) if self.native else "native=False"
+        native = step_program.native_chunk(self, blocks) if self.loop_reason is None else None
         self.loop_kind = "C" if native else "Python"
         return native or step_program.python_chunk(self, blocks)
 
@@ -249,8 +279,9 @@ class Master:
         read after the step serves the record only (and can wait for a recording step)."""
         if name not in self._early:
             return False
-        early = self._early[name][0]
-        return all(s in early for ops in self._ops.values() for _, source, s, _, _ in ops if source.name == name)
+        early = self._early[name]
+        return all(s in early.get(g, ((), None))[0] for other in self._unit
+                   for _, _, source, g, s, _, _ in self.connection_ops(other) if source.name == name)
 
     def _fail(self, i, call, t, status):
         raise FMUFailure(self.units[i], call, status, time=t)
@@ -260,7 +291,9 @@ class Master:
         """Initialise, step to ``stop_time`` and return the recorded results (structured array).
 
         ``parameters`` ({"component.variable": value}) apply to this run only, after the system's
-        parameter bindings. A second call starts again from a reset (see :meth:`reset`).
+        parameter bindings; values (or their text) are typed by each variable's declared type. A
+        second call starts again from a reset (see :meth:`reset`). A run that an FMU ended early
+        returns the rows up to that time, and ``termination`` says who ended it.
         """
         if self._state == "closed":
             raise ValueError("this Master is closed")
@@ -275,22 +308,28 @@ class Master:
         n_steps = max(1, math.ceil(span - 1e-9))
         last = n_steps - 1
         rows = 1 + n_steps // self.output_interval + (1 if n_steps % self.output_interval else 0)
-        buf = np.empty(rows, dtype=[("time", "f8")] + [(name, "f8") for name in self.record])
+        buf = np.empty(rows, dtype=step_program.buffer_dtype(self))
         self._buf, self._row = buf, 0
+        self.termination = None
         t = t0
         bar = None
         try:
             self._initialize(t0, grouped)
-            buf[0] = (t0, *(self._unit[c].out_val[s] for c, s in self._record_sources))
+            buf[0] = self._record_row(t0)
             self._row = 1
+            if any(u.terminated_at is not None for u in self.units):
+                self._stop(0, buf, -1)  # asked to end during initialisation: the record at t0 is the last
+                self._row = 1
             chunk = max(1, min(n_steps, 10000, n_steps // 100 or 1))
             bar = _ProgressBar(n_steps) if self.progress else None
-            for k0 in range(0, n_steps, chunk):
+            for k0 in range(0, n_steps if self.termination is None else 0, chunk):
                 t = t0 + k0 * self.step
                 k1 = min(n_steps, k0 + chunk)
                 self._row = self._run_chunk(k0, k1, self._row, t0, self.step, stop_time, last, buf, self.output_interval)
                 if bar:
                     bar.update(k1)
+                if self.termination is not None:
+                    break
             if bar:
                 bar.close()
         except FMUFailure as failure:
@@ -304,7 +343,20 @@ class Master:
                 bar.close()
             raise CosimInterrupted(t, buf[: self._row].copy()) from None
         self._state = "finished"
-        return buf
+        return buf[: self._row]
+
+    def _record_row(self, t: float) -> tuple:
+        return (t, *(self._unit[c].value(self._unit[c].channels[f].out_names[s]) for c, f, s in self._record_sources))
+
+    def _stop(self, row: int, buf: np.ndarray, k: int) -> int:
+        """An FMU asked to end the simulation in macro step ``k``: record the row at the earliest
+        requested time (every component has finished the step) and note who stopped the run."""
+        unit = min((u for u in self.units if u.terminated_at is not None), key=lambda u: u.terminated_at)
+        self.termination = Termination(unit.name, unit.terminated_at, unit.termination_call)
+        if k >= 0:
+            buf[row] = self._record_row(unit.terminated_at)
+            row += 1
+        return row
 
     def _check_parameters(self, parameters: dict) -> dict[str, dict]:
         grouped = {u.name: {} for u in self.units}
@@ -312,8 +364,14 @@ class Master:
             component, variable = _split(reference, "parameter name")
             if component not in self._unit:
                 raise ValueError(f"parameter {reference!r} names unknown component {component!r}")
-            self._unit[component].variable(variable)
-            grouped[component][variable] = value
+            unit = self._unit[component]
+            declared = unit.variable(variable)
+            kind = kind_of(declared)
+            if kind is None:
+                raise ValueError(f"parameter {reference!r} has type {declared.type}, which cannot be set by value")
+            # typed by the model description: "--set shaper.kind=zvd", "--set a.flag=true"
+            grouped[component][variable] = typed_value(value, kind, enumeration_items(unit.description, declared),
+                                                       f"parameter {reference}")
         return grouped
 
     def _error(self, failure: FMUFailure, t, partial) -> CosimError:
@@ -350,14 +408,16 @@ class Master:
             unit.exit_initialization(t0, self.tolerance)
         for unit in self.units:
             unit.read()
-            if unit.name in self._early:
-                early = self._early[unit.name][1]
-                early[:] = unit.out_val[: unit.n_out]
+            for f, (_, early) in self._early.get(unit.name, {}).items():
+                early[:] = unit.channels[f].out_val[: unit.channels[f].n_out]
 
     def _transfer(self, unit) -> None:
         values = unit.in_val
         for d, source, s, f, o in self._ops[unit.name]:
             values[d] = source.out_val[s] * f + o
+        for f, d, source, g, s, factor, offset in self._typed_ops[unit.name]:
+            value = source.channels[g].out_val[s]
+            unit.channels[f].in_val[d] = value * factor + offset if factor != 1.0 or offset != 0.0 else value
 
     def _transfer_all(self) -> None:
         for unit in self.units:
@@ -479,16 +539,37 @@ def simulate(system_or_path, stop_time: float, step: float, *, parameters: dict 
 
 
 def save_results(results: np.ndarray, path) -> Path:
-    """Write results to ``.csv`` (header = field names) or ``.parquet`` (needs pyarrow)."""
+    """Write results to ``.csv`` (header = field names) or ``.parquet`` (needs pyarrow), each column
+    with its type: floats with 17 significant digits, integers, booleans (true/false), strings."""
     path = Path(path)
-    if path.suffix == ".csv":
-        np.savetxt(path, results.view((np.float64, len(results.dtype.names))) if len(results) else np.empty((0, len(results.dtype.names))),
-                   delimiter=",", header=",".join(results.dtype.names), comments="", fmt="%.17g")
+    names = results.dtype.names
+    if path.suffix == ".csv" and all(results.dtype[name] == np.float64 for name in names):
+        np.savetxt(path, results.view((np.float64, len(names))) if len(results) else np.empty((0, len(names))),
+                   delimiter=",", header=",".join(names), comments="", fmt="%.17g")  # fast for long float runs
+    elif path.suffix == ".csv":
+        import csv
+
+        formats = [_csv_format(results.dtype[name]) for name in names]
+        with open(path, "w", newline="") as handle:
+            writer = csv.writer(handle, lineterminator="\n")
+            writer.writerow(names)
+            for row in results:
+                writer.writerow([form(value) for form, value in zip(formats, row)])
     elif path.suffix == ".parquet":
         import pyarrow as pa
         import pyarrow.parquet as pq
 
-        pq.write_table(pa.table({name: results[name] for name in results.dtype.names}), path)
+        columns = {name: pa.array(results[name].tolist(), type=pa.string()) if results.dtype[name].kind == "O" else results[name]
+                   for name in names}
+        pq.write_table(pa.table(columns), path)
     else:
         raise ValueError(f"results path must end in .csv or .parquet, got {path.name!r}")
     return path
+
+
+def _csv_format(dtype: np.dtype):
+    if dtype.kind == "f":
+        return lambda value: f"{value:.17g}"
+    if dtype.kind == "b":
+        return lambda value: "true" if value else "false"
+    return str

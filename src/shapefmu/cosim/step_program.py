@@ -15,7 +15,13 @@ rendered twice, from the same plan:
 Both have the signature ``run_chunk(k0, k1, row, t0, h, t_stop, last, buf, every) -> row``: macro
 steps ``k0 <= k < k1`` of ``h`` from ``t0`` (step ``last`` cut at ``t_stop``), recording every
 ``every``-th step into ``buf`` from ``row`` on; an FMI call worse than fmi2Warning raises
-``FMUFailure`` through ``master._fail``.
+``FMUFailure`` through ``master._fail``. When an FMU asks to end the simulation in step ``k`` (FMI 2.0:
+fmi2DoStep returns fmi2Discard and fmi2Terminated is true; FMI 3.0: terminateSimulation; Model
+Exchange: terminateSimulation at an event), the other components still finish that macro step, and
+``master._stop`` records the row at the requested time and ends the run.
+
+Values of every FMI type travel (one array pair per family, see :mod:`.types`); strings only in the
+Python loop. ``python_only_reason`` says why a system runs the Python loop.
 """
 
 from __future__ import annotations
@@ -34,9 +40,6 @@ import numpy as np
 
 from shapefmu.cosim.units import ModelExchangeUnit
 
-CALLS = ("fmi2SetReal", "fmi2GetReal", "fmi2DoStep")
-
-
 @dataclass(frozen=True)
 class Guard:
     """When a block runs: every step (``every=1, ends=False, recording=False``), on steps where a
@@ -48,11 +51,12 @@ class Guard:
     recording: bool = False
 
 
-# Statements: ("input", i, d, early, j, s, factor, offset)   iv_i[d] = (ev|ov)_j[s] * factor + offset
-#             ("set", i) / ("early", i) / ("read", i)          fmi2SetReal / fmi2GetReal into ev_i / into ov_i
-#             ("do", i, m)                                      fmi2DoStep over dt, or min(m h, t_stop - t)
-#             ("me", i, m)                                      a Model Exchange unit's step (Python only)
-#             ("loop", n)                                       solve algebraic loop n (Python only)
+# Statements: ("input", i, f, d, early, j, g, s, factor, offset)  iv_i_f[d] = (ev|ov)_j_g[s] * factor + offset
+#             ("set", i, f) / ("early", i, f) / ("read", i, f)     Set<f> / Get<f> into ev_i_f / into ov_i_f
+#             ("do", i, m)                                         fmi2DoStep / fmi3DoStep over dt, or min(m h, t_stop - t)
+#             ("me", i, m)                                         a Model Exchange unit's step (Python only)
+#             ("loop", n)                                          solve algebraic loop n (Python only)
+# f, g: family names (see .types); factor and offset are 1 and 0 except on Real connections.
 
 
 def plan(master) -> list[tuple[Guard, list[tuple]]]:
@@ -62,23 +66,21 @@ def plan(master) -> list[tuple[Guard, list[tuple]]]:
 
     def inputs(i):
         out = []
-        for d, source, s, f, o in master._ops[units[i].name]:
-            early = source.name in master._early and s in master._early[source.name][0]
-            out.append(("input", i, d, early, index[source.name], s, f, o))
+        for f, d, source, g, s, factor, offset in master.connection_ops(units[i].name):
+            early = s in master._early.get(source.name, {}).get(g, ((), None))[0]
+            out.append(("input", i, f, d, early, index[source.name], g, s, factor, offset))
         return out
 
     def step(i, with_inputs):
         unit = units[i]
         out = inputs(i) if with_inputs else []
-        if unit.n_in:
-            out.append(("set", i))
-        if unit.name in master._early:
-            out.append(("early", i))
+        out += [("set", i, f) for f, channel in unit.channels.items() if channel.n_in]
+        out += [("early", i, f) for f in master._early.get(unit.name, {})]
         out.append(("me" if isinstance(unit, ModelExchangeUnit) else "do", i, master.multiples[unit.name]))
         return out
 
     def read(i):
-        return [("read", i)] if units[i].n_out else []
+        return [("read", i, f) for f, channel in units[i].channels.items() if channel.n_out]
 
     blocks = []
     if master.algorithm == "jacobi":
@@ -112,43 +114,53 @@ def _condition(guard: Guard, python: bool) -> str | None:
     return both.join(parts) or None
 
 
+def _value(op, python: bool) -> str:
+    """The right-hand side of an input statement."""
+    _, i, f, d, early, j, g, s, factor, offset = op
+    value = f"{'ev' if early else 'ov'}{j}_{g}[{s}]" + ("" if factor == 1.0 else f" * {factor!r}") + ("" if offset == 0.0 else f" + {offset!r}")
+    return value
+
+
 # ------------------------------------------------------------------------------------------------
 # Python
 
 
 def python_chunk(master, blocks):
     """The plan as a generated Python function (see the module docstring)."""
-    env = {"fail": master._fail, "solve_loop": master._solve_loop, "min": min}
+    env = {"fail": master._fail, "solve_loop": master._solve_loop, "stop": master._stop, "min": min}
     for i, u in enumerate(master.units):
-        env.update({f"c{i}": u.c, f"set{i}": u.set_real, f"get{i}": u.get_real, f"do{i}": u.do_step,
-                    f"ivr{i}": u.in_vr, f"iv{i}": u.in_val, f"ovr{i}": u.out_vr, f"ov{i}": u.out_val,
-                    f"nin{i}": u.n_in_arg, f"nout{i}": u.n_out_arg, f"ta{i}": u.time_arg, f"ha{i}": u.step_arg,
-                    f"unit{i}": u})
-        if u.name in master._early:
-            env[f"ev{i}"] = master._early[u.name][1]
+        env.update({f"c{i}": u.c, f"do{i}": u.do_step, f"ta{i}": u.time_arg, f"ha{i}": u.step_arg, f"unit{i}": u})
+        for f, ch in u.channels.items():
+            env.update({f"set{i}_{f}": ch.setter, f"get{i}_{f}": ch.getter, f"ivr{i}_{f}": ch.in_vr, f"iv{i}_{f}": ch.in_val,
+                        f"ovr{i}_{f}": ch.out_vr, f"ov{i}_{f}": ch.out_val, f"nin{i}_{f}": ch.n_in_arg, f"nout{i}_{f}": ch.n_out_arg})
+        for f, (_, early) in master._early.get(u.name, {}).items():
+            env[f"ev{i}_{f}"] = early
 
     def statement(op):
         kind, i = op[0], op[1]
+        unit = master.units[i]
         if kind == "input":
-            _, i, d, early, j, s, f, o = op
-            return [f"iv{i}[{d}] = {'ev' if early else 'ov'}{j}[{s}]" + ("" if f == 1.0 else f" * {f!r}")
-                    + ("" if o == 0.0 else f" + {o!r}")]
-        if kind == "set":
-            return [f"if (status := set{i}(c{i}, ivr{i}, nin{i}, iv{i})) > 1: fail({i}, 'fmi2SetReal', t, status)"]
-        if kind == "early":
-            return [f"if (status := get{i}(c{i}, ovr{i}, nout{i}, ev{i})) > 1: fail({i}, 'fmi2GetReal', t, status)"]
-        if kind == "read":
-            return [f"if (status := get{i}(c{i}, ovr{i}, nout{i}, ov{i})) > 1: fail({i}, 'fmi2GetReal', t + dt, status)"]
+            return [f"iv{i}_{op[2]}[{op[3]}] = {_value(op, python=True)}"]
+        if kind in ("set", "early", "read"):
+            f = op[2]
+            call = f"{unit.prefix}{'Set' if kind == 'set' else 'Get'}{f}"
+            arrays = {"set": (f"ivr{i}_{f}", f"nin{i}_{f}", f"iv{i}_{f}"), "early": (f"ovr{i}_{f}", f"nout{i}_{f}", f"ev{i}_{f}"),
+                      "read": (f"ovr{i}_{f}", f"nout{i}_{f}", f"ov{i}_{f}")}[kind]
+            extra = f", {arrays[1]}" if unit.fmi3 else ""
+            function = f"set{i}_{f}" if kind == "set" else f"get{i}_{f}"
+            when = "t + dt" if kind == "read" else "t"
+            return [f"if (status := {function}(c{i}, {', '.join(arrays)}{extra})) > 1: fail({i}, {call!r}, {when}, status)"]
         if kind == "loop":
             return [f"solve_loop({i}, t, dt)"]
         m = op[2]
         h = "dt" if m == 1 else f"min({m!r} * h, t_stop - t)"
-        if kind == "me":
-            return [f"unit{i}.step(t, {h})"]
+        if kind == "me" or unit.fmi3:
+            return [f"if unit{i}.step(t, {h}): stopping = True"]
         return [f"ta{i}.value = t", f"ha{i}.value = {h}",
-                f"if (status := do{i}(c{i}, ta{i}, ha{i}, 0)) > 1: fail({i}, 'fmi2DoStep', t, status)"]
+                f"if (status := do{i}(c{i}, ta{i}, ha{i}, 0)) > 1 and unit{i}.stop_or_fail(t, {h}, status): stopping = True"]
 
     lines = ["def run_chunk(k0, k1, row, t0, h, t_stop, last, buf, every):",
+             "    stopping = False",
              "    for k in range(k0, k1):",
              "        t = t0 + k * h",
              "        dt = h if k != last else t_stop - t"]
@@ -159,8 +171,11 @@ def python_chunk(master, blocks):
             lines.append(f"        if {condition}:")
         lines += [indent + line for op in body for line in statement(op)]
     index = {u.name: i for i, u in enumerate(master.units)}
-    recorded = ", ".join(f"ov{index[c]}[{s}]" for c, s in master._record_sources)
-    lines += ["        if (k + 1) % every == 0 or k == last:",
+    recorded = ", ".join(f"(ov{index[c]}_{f}[{s}] or b'').decode(errors='replace')" if f == "String" else f"ov{index[c]}_{f}[{s}]"
+                         for c, f, s in master._record_sources)
+    lines += ["        if stopping:",
+              "            return stop(row, buf, k)",
+              "        if (k + 1) % every == 0 or k == last:",
               f"            buf[row] = (t + dt, {recorded})" if recorded else "            buf[row] = (t + dt,)",
               "            row += 1",
               "    return row"]
@@ -175,101 +190,193 @@ def python_chunk(master, blocks):
 # Shared libraries compiled in this process, by the hash of their source.
 _COMPILED: dict[str, ctypes.CDLL] = {}
 
-
-class _Unit(ctypes.Structure):
-    """Per component: the instance, its three FMI functions and its value arrays (see ``_C_TYPES``)."""
-
-    _fields_ = [("c", c_void_p), ("set", c_void_p), ("get", c_void_p), ("do_step", c_void_p),
-                ("ivr", c_void_p), ("iv", c_void_p), ("nin", ctypes.c_size_t),
-                ("ovr", c_void_p), ("ov", c_void_p), ("nout", ctypes.c_size_t), ("ev", c_void_p)]
-
-
-_C_TYPES = """#include <math.h>
+_C_HEADER = """#include <math.h>
 #include <stddef.h>
-typedef int (*set_real_t)(void *, const unsigned int *, size_t, const double *);
-typedef int (*get_real_t)(void *, const unsigned int *, size_t, double *);
-typedef int (*do_step_t)(void *, double, double, int);
-typedef struct {
-    void *c; set_real_t set; get_real_t get; do_step_t do_step;
-    const unsigned int *ivr; double *iv; size_t nin;
-    const unsigned int *ovr; double *ov; size_t nout; double *ev;
-} unit_t;
-/* On a failed call: failure[0] = component, failure[1] = call (index into CALLS),
-   failure[2] = status, *failure_time = the time it was called for; returns -1. */
+#include <string.h>
+typedef int (*set2_t)(void *, const unsigned int *, size_t, const void *);
+typedef int (*get2_t)(void *, const unsigned int *, size_t, void *);
+typedef int (*set3_t)(void *, const unsigned int *, size_t, const void *, size_t);
+typedef int (*get3_t)(void *, const unsigned int *, size_t, void *, size_t);
+typedef int (*do2_t)(void *, double, double, int);
+typedef int (*do3_t)(void *, double, double, _Bool, _Bool *, _Bool *, _Bool *, double *);
+/* On a failed call: failure[0] = component, failure[1] = call (index into calls), failure[2] = status,
+   *failure_time = the time it was called for; returns -1. */
 #define FAIL(I, CALL, T, STATUS) do { failure[0] = (I); failure[1] = (CALL); failure[2] = (STATUS); \\
     *failure_time = (T); return -1; } while (0)
+/* A recorded value into the row at byte offset OFF (memcpy: fields of a packed row need not be aligned). */
+#define PUT(TYPE, OFF, VALUE) do { TYPE value_ = (VALUE); memcpy(record + (OFF), &value_, sizeof value_); } while (0)
 """
+
+# numpy dtype of a recorded column -> C type it is stored as.
+_RECORD_C = {"f8": "double", "f4": "float", "i1": "signed char", "u1": "unsigned char", "i2": "short",
+             "u2": "unsigned short", "i4": "int", "u4": "unsigned int", "i8": "long long", "u8": "unsigned long long",
+             "?": "unsigned char"}
+
+
+def python_only_reason(master, blocks) -> str | None:
+    """Why the plan cannot run as a compiled C loop, or None if it can."""
+    for _, body in blocks:
+        for op in body:
+            if op[0] == "me":
+                return f"component {master.units[op[1]].name!r} runs as Model Exchange (integrated in Python)"
+            if op[0] == "loop":
+                return f"the algebraic loop through {', '.join(master._loops[op[1]].loop_variables)} is solved in Python"
+    for c in master.system.connections:
+        family = master._unit[c.end_component].input_slot[c.end_connector][0]
+        if master._unit[c.end_component].channels[family].family.c_type is None:
+            return f"connection {c.start} -> {c.end} joins {family} variables, which the compiled loop does not move"
+    for reference, (component, family, _) in zip(master.record, master._record_sources):
+        if master._unit[component].channels[family].family.c_type is None:
+            return f"recorded {reference} is a {family} variable, which the compiled loop does not move"
+    compiler = os.environ.get("CC") or shutil.which("cc") or shutil.which("gcc")
+    if not compiler:
+        return "no C compiler (set CC or install gcc)"
+    return None
 
 
 def native_chunk(master, blocks):
-    """The plan as a compiled C loop, or None where it cannot be: a Model Exchange component or an
-    algebraic loop in the system (both run Python), or no C compiler on the machine."""
-    if any(op[0] in ("me", "loop") for _, body in blocks for op in body):
+    """The plan as a compiled C loop, or None where it cannot be (``python_only_reason`` says why;
+    a failed compilation sets ``master.loop_reason``)."""
+    if python_only_reason(master, blocks):
         return None
     compiler = os.environ.get("CC") or shutil.which("cc") or shutil.which("gcc")
-    if not compiler:
-        return None
-    source = _c_source(master, blocks)
+    pointers, names = _pointer_table(master)
+    source, calls = _c_source(master, blocks, names, buffer_dtype(master))
     library = _compile(compiler, source)
     if library is None:
+        master.loop_reason = "compiling the step loop failed"
         return None
     function = library.run_chunk
     function.restype = c_long
-    function.argtypes = [POINTER(_Unit), c_long, c_long, c_long, c_double, c_double, c_double, c_long,
-                         c_void_p, c_long, POINTER(c_long), POINTER(c_double)]
-    units = (_Unit * len(master.units))()
-    for i, u in enumerate(master.units):
-        early = master._early.get(u.name)
-        units[i] = _Unit(u.c.value, _address(u.set_real), _address(u.get_real), _address(u.do_step),
-                         ctypes.addressof(u.in_vr), ctypes.addressof(u.in_val), u.n_in,
-                         ctypes.addressof(u.out_vr), ctypes.addressof(u.out_val), u.n_out,
-                         ctypes.addressof(early[1]) if early else None)
+    function.argtypes = [c_void_p, c_long, c_long, c_long, c_double, c_double, c_double, c_long, c_void_p, c_long,
+                         POINTER(c_long), POINTER(c_double), POINTER(c_long), POINTER(c_double), POINTER(c_long)]
+    table = (c_void_p * len(pointers))(*pointers)
+    n = len(master.units)
     failure, failure_time = (c_long * 3)(), c_double()
-    keep = (library, units, master.units)  # alive as long as the chunk function
+    pending, pending_time, stop_step = (c_long * n)(), (c_double * n)(), (c_long * 1)()
+    dtype = buffer_dtype(master)
+    keep = (library, table, master.units)  # alive as long as the chunk function
 
     def run_chunk(k0, k1, row, t0, h, t_stop, last, buf, every):
-        if not (buf.flags.c_contiguous and all(buf.dtype[name] == np.float64 for name in buf.dtype.names)):
-            raise ValueError("the record buffer must be a contiguous array of float64 fields")
-        result = function(keep[1], k0, k1, row, t0, h, t_stop, last, buf.ctypes.data, every, failure, failure_time)
+        if not (buf.flags.c_contiguous and buf.dtype == dtype):
+            raise ValueError(f"the record buffer must be a contiguous array of dtype {dtype}")
+        stop_step[0] = -1
+        result = function(keep[1], k0, k1, row, t0, h, t_stop, last, buf.ctypes.data, every, failure, failure_time,
+                          pending, pending_time, stop_step)
         if result < 0:
-            master._fail(failure[0], CALLS[failure[1]], failure_time.value, failure[2])
+            master._fail(failure[0], calls[failure[1]], failure_time.value, failure[2])
+        if stop_step[0] >= 0:
+            k = stop_step[0]
+            t = t0 + k * h
+            dt = h if k != last else t_stop - t
+            for i, unit in enumerate(master.units):
+                if pending[i] == 1:
+                    unit.stop_or_fail(t, pending_time[i] - t if unit.fmi3 else dt, 2)
+                elif pending[i] == 2:
+                    unit.terminated_at = pending_time[i]
+                    unit.termination_call = "fmi3DoStep set terminateSimulation"
+                pending[i] = 0
+            return master._stop(result, buf, k)
         return result
 
     return run_chunk
 
 
-def _address(function) -> int:
-    return ctypes.cast(function, c_void_p).value
+def buffer_dtype(master) -> np.dtype:
+    """The record buffer's dtype: time, then one typed column per recorded variable (packed)."""
+    return np.dtype([("time", "f8")] + [(name, master._unit[c].channels[f].family.record)
+                                        for name, (c, f, _) in zip(master.record, master._record_sources)])
 
 
-def _c_source(master, blocks) -> str:
+def _pointer_table(master) -> tuple[list[int], list[dict[str, int]]]:
+    """Every pointer the C loop needs, in one array; ``names[i][key]`` is an entry's index."""
+    pointers, names = [], []
+    for u in master.units:
+        entries = {"c": u.c.value, "do": _address(u.do_step)}
+        for f, ch in u.channels.items():
+            entries.update({f"set_{f}": _address(ch.setter) if ch.n_in else None,
+                            f"get_{f}": _address(ch.getter) if ch.n_out else None,
+                            f"ivr_{f}": ctypes.addressof(ch.in_vr), f"iv_{f}": ctypes.addressof(ch.in_val),
+                            f"ovr_{f}": ctypes.addressof(ch.out_vr), f"ov_{f}": ctypes.addressof(ch.out_val)})
+        for f, (_, early) in master._early.get(u.name, {}).items():
+            entries[f"ev_{f}"] = ctypes.addressof(early)
+        names.append({key: len(pointers) + n for n, key in enumerate(entries)})
+        pointers += list(entries.values())
+    return pointers, names
+
+
+def _address(function) -> int | None:
+    return ctypes.cast(function, c_void_p).value if function is not None else None
+
+
+def _c_source(master, blocks, names, dtype) -> tuple[str, list[str]]:
+    """The C source of the plan and the names of the FMI calls its FAIL indices refer to."""
+    calls: list[str] = []
+
+    def call_index(name: str) -> int:
+        if name not in calls:
+            calls.append(name)
+        return calls.index(name)
+
+    declarations = []
+    for i, u in enumerate(master.units):
+        v = "3" if u.fmi3 else "2"
+        declarations += [f"    void *c{i} = P[{names[i]['c']}];", f"    do{v}_t do{i} = (do{v}_t)P[{names[i]['do']}];"]
+        for f, ch in u.channels.items():
+            t = ch.family.c_type
+            declarations += [f"    const unsigned int *ivr{i}_{f} = P[{names[i][f'ivr_{f}']}];",
+                             f"    {t} *iv{i}_{f} = P[{names[i][f'iv_{f}']}];",
+                             f"    const unsigned int *ovr{i}_{f} = P[{names[i][f'ovr_{f}']}];",
+                             f"    {t} *ov{i}_{f} = P[{names[i][f'ov_{f}']}];",
+                             f"    set{v}_t set{i}_{f} = (set{v}_t)P[{names[i][f'set_{f}']}];",
+                             f"    get{v}_t get{i}_{f} = (get{v}_t)P[{names[i][f'get_{f}']}];"]
+            if f in master._early.get(u.name, {}):
+                declarations.append(f"    {t} *ev{i}_{f} = P[{names[i][f'ev_{f}']}];")
+        if u.fmi3:
+            declarations.append(f"    _Bool event{i}, terminate{i}, early{i}; double last{i};")
+
     def statement(op):
         kind, i = op[0], op[1]
-        u = f"u[{i}]"
+        u = master.units[i]
         if kind == "input":
-            _, i, d, early, j, s, f, o = op
-            value = f"u[{j}].{'ev' if early else 'ov'}[{s}]" + ("" if f == 1.0 else f" * {f!r}") + ("" if o == 0.0 else f" + {o!r}")
-            return [f"u[{i}].iv[{d}] = {value};"]
-        if kind == "set":
-            return [f"if ((status = {u}.set({u}.c, {u}.ivr, {u}.nin, {u}.iv)) > 1) FAIL({i}, 0, t, status);"]
-        if kind == "early":
-            return [f"if ((status = {u}.get({u}.c, {u}.ovr, {u}.nout, {u}.ev)) > 1) FAIL({i}, 1, t, status);"]
-        if kind == "read":
-            return [f"if ((status = {u}.get({u}.c, {u}.ovr, {u}.nout, {u}.ov)) > 1) FAIL({i}, 1, t + dt, status);"]
+            target = u.channels[op[2]].family.c_type
+            return [f"iv{i}_{op[2]}[{op[3]}] = ({target})({_value(op, python=False)});"]
+        if kind in ("set", "early", "read"):
+            f = op[2]
+            ch = u.channels[f]
+            count = ch.n_in if kind == "set" else ch.n_out
+            arrays = {"set": f"ivr{i}_{f}, {count}, iv{i}_{f}", "early": f"ovr{i}_{f}, {count}, ev{i}_{f}",
+                      "read": f"ovr{i}_{f}, {count}, ov{i}_{f}"}[kind]
+            extra = f", {count}" if u.fmi3 else ""
+            function = f"set{i}_{f}" if kind == "set" else f"get{i}_{f}"
+            index = call_index(f"{u.prefix}{'Set' if kind == 'set' else 'Get'}{f}")
+            when = "t + dt" if kind == "read" else "t"
+            return [f"if ((status = {function}(c{i}, {arrays}{extra})) > 1) FAIL({i}, {index}, {when}, status);"]
         m = op[2]
         h = "dt" if m == 1 else f"fmin({m!r} * h, t_stop - t)"  # Python's min: both finite, no NaN
-        return [f"if ((status = {u}.do_step({u}.c, t, {h}, 0)) > 1) FAIL({i}, 2, t, status);"]
+        index = call_index(f"{u.prefix}DoStep")
+        if u.fmi3:
+            return [f"{{ const double hs = {h};",
+                    f"  status = do{i}(c{i}, t, hs, 0, &event{i}, &terminate{i}, &early{i}, &last{i});",
+                    f"  if (status > 1 && !(status == 2 && terminate{i})) FAIL({i}, {index}, t, status);",
+                    f"  if (terminate{i}) {{ pending[{i}] = 2; pending_time[{i}] = (last{i} >= t && last{i} <= t + hs) ? last{i} : t + hs; stop = 1; }} }}"]
+        # fmi2Discard may be a termination request: Python asks fmi2GetBooleanStatus after the step.
+        return [f"{{ const double hs = {h};",
+                f"  if ((status = do{i}(c{i}, t, hs, 0)) > 1) {{ if (status != 2) FAIL({i}, {index}, t, status);",
+                f"    pending[{i}] = 1; pending_time[{i}] = t + hs; stop = 1; }} }}"]
 
     index = {u.name: i for i, u in enumerate(master.units)}
-    columns = 1 + len(master._record_sources)
-    lines = [_C_TYPES,
-             "long run_chunk(unit_t *u, long k0, long k1, long row, double t0, double h, double t_stop, long last,",
-             "               double *buf, long every, long *failure, double *failure_time) {",
+    lines = [_C_HEADER,
+             "long run_chunk(void **P, long k0, long k1, long row, double t0, double h, double t_stop, long last,",
+             "               char *buf, long every, long *failure, double *failure_time, long *pending,",
+             "               double *pending_time, long *stop_step) {",
              "    int status;",
              "    (void)status;",
+             *declarations,
              "    for (long k = k0; k < k1; k++) {",
              "        double t = t0 + (double)k * h;",
-             "        double dt = k != last ? h : t_stop - t;"]
+             "        double dt = k != last ? h : t_stop - t;",
+             "        int stop = 0;"]
     for guard, body in blocks:
         condition = _condition(guard, python=False)
         indent = "        " if condition is None else "            "
@@ -278,12 +385,17 @@ def _c_source(master, blocks) -> str:
         lines += [indent + line for op in body for line in statement(op)]
         if condition is not None:
             lines.append("        }")
-    lines += ["        if ((k + 1) % every == 0 || k == last) {",
-              f"            double *record = buf + row * {columns};",
-              "            record[0] = t + dt;"]
-    lines += [f"            record[{n + 1}] = u[{index[c]}].ov[{s}];" for n, (c, s) in enumerate(master._record_sources)]
+    lines += ["        if (stop) { *stop_step = k; return row; }",
+              "        if ((k + 1) % every == 0 || k == last) {",
+              f"            char *record = buf + row * {dtype.itemsize}L;",
+              "            PUT(double, 0, t + dt);"]
+    for n, (c, f, s) in enumerate(master._record_sources):
+        field = dtype.names[n + 1]
+        kind = dtype.fields[field][0].str[1:] if dtype.fields[field][0].char != "?" else "?"
+        value = f"ov{index[c]}_{f}[{s}]"
+        lines.append(f"            PUT({_RECORD_C[kind]}, {dtype.fields[field][1]}, {value + ' != 0' if kind == '?' else value});")
     lines += ["            row++;", "        }", "    }", "    return row;", "}", ""]
-    return "\n".join(lines)
+    return "\n".join(lines), calls
 
 
 def _compile(compiler: str, source: str):

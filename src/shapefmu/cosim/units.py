@@ -31,6 +31,8 @@ from fmpy.fmi2 import (
 )
 from fmpy.fmi1 import printLogMessage
 
+from shapefmu.cosim.types import FAMILIES_2, Family, enumeration_items, family_of, kind_of, typed_value
+
 STATUS_NAMES = {0: "fmi2OK", 1: "fmi2Warning", 2: "fmi2Discard", 3: "fmi2Error", 4: "fmi2Fatal", 5: "fmi2Pending"}
 
 # fmpy's logger proxy (fmpy.logging.addLoggerProxy) formats an FMU's C varargs message and then calls
@@ -60,14 +62,54 @@ class FMUFailure(Exception):
         self.unit = unit
         self.call = call
         self.status = STATUS_NAMES.get(status, status)
+        if isinstance(status, int) and getattr(unit, "fmi3", False):
+            self.status = self.status.replace("fmi2", "fmi3")  # the same numbers name fmi3Status values
         self.time = time
         super().__init__(f"{call} returned {self.status}")
+
+
+class Channel:
+    """The batched value arrays of one family (see :mod:`.types`) in one unit: the inputs set before
+    each step and the variables read after it, with the raw FMI functions that move them."""
+
+    def __init__(self, family: Family):
+        self.family = family
+        self.in_names: list[str] = []
+        self.out_names: list[str] = []
+
+    def allocate(self, variables: dict, raw_function, fmi3: bool = False) -> None:
+        element = self.family.ctype
+        self.n_in, self.n_out = len(self.in_names), len(self.out_names)
+        self.n_in_arg, self.n_out_arg = c_size_t(self.n_in), c_size_t(self.n_out)
+        self.in_vr = (c_uint * max(1, self.n_in))(*[variables[n].valueReference for n in self.in_names])
+        self.in_val = (element * max(1, self.n_in))()
+        self.out_vr = (c_uint * max(1, self.n_out))(*[variables[n].valueReference for n in self.out_names])
+        self.out_val = (element * max(1, self.n_out))()
+        self.setter = raw_function(f"Set{self.family.name}")
+        self.getter = raw_function(f"Get{self.family.name}")
+        self.fmi3 = fmi3
+
+    def set(self, c) -> int:
+        # FMI 3.0 setters and getters take the number of values after the array (nValues).
+        extra = (self.n_in_arg,) if self.fmi3 else ()
+        return self.setter(c, self.in_vr, self.n_in_arg, self.in_val, *extra)
+
+    def get(self, c) -> int:
+        extra = (self.n_out_arg,) if self.fmi3 else ()
+        return self.getter(c, self.out_vr, self.n_out_arg, self.out_val, *extra)
 
 
 class Unit:
     """A Co-Simulation FMU instance (Model Exchange: see :class:`ModelExchangeUnit`)."""
 
     interface = "CoSimulation"
+    fmi3 = False
+    prefix = "fmi2"
+    real = "Real"  # the family of floating-point variables, which the fast paths move
+    family_table = FAMILIES_2
+    terminated_at: float | None = None  # set when the FMU asks to end the simulation
+    state_calls = ("fmi2GetFMUstate", "fmi2SetFMUstate", "fmi2FreeFMUstate")  # FMI 3.0 spells them FMUState
+    queues = _MESSAGE_QUEUES  # where the process-wide logger finds this unit's messages
 
     def __init__(self, name: str, fmu_path: Path, unzip_directory: str, description):
         self.name = name
@@ -83,8 +125,6 @@ class Unit:
         # fmpy's argtypes make ctypes convert every argument on every call, which costs about as
         # much as a native FMU's whole step (~0.5 us of ~1 us per call, measured).
         self.c = c_void_p(self.fmu.component)
-        self.set_real = _raw(dll, "fmi2SetReal")
-        self.get_real = _raw(dll, "fmi2GetReal")
         self.do_step = _raw(dll, "fmi2DoStep")
         self.time_arg, self.step_arg = c_double(), c_double()
         self.can_roll_back = bool(self._capabilities().canGetAndSetFMUstate)
@@ -120,18 +160,49 @@ class Unit:
             raise ValueError(f"component {self.name!r} ({self.fmu_path.name}) has no variable {name!r}")
         return variable
 
+    def family(self, name: str) -> Family:
+        """The family (see :mod:`.types`) that gets and sets variable ``name``."""
+        variable = self.variable(name)
+        if getattr(variable, "shape", None):
+            raise ValueError(f"{self.name}.{name} is an array variable {variable.shape}; the master connects and "
+                             f"records scalar variables only")
+        try:
+            return family_of(variable, self.fmi3)
+        except ValueError as error:
+            raise ValueError(f"{self.name}.{error}") from None
+
     def configure(self, inputs: list[str], reads: list[str]) -> None:
-        """Allocate the batched arrays: ``inputs`` set before each step, ``reads`` read after it."""
-        for name in (*inputs, *reads):
-            if self.variable(name).type != "Real":
-                raise ValueError(f"{self.name}.{name} is {self.variable(name).type}; the master connects and records Real variables only")
+        """Allocate the batched arrays: ``inputs`` set before each step, ``reads`` read after it,
+        one pair of arrays per family; ``slot[name]`` is (family name, index) in them."""
         self.inputs, self.reads = list(inputs), list(reads)
-        self.n_in, self.n_out = len(inputs), len(reads)
-        self.n_in_arg, self.n_out_arg = c_size_t(self.n_in), c_size_t(self.n_out)
-        self.in_vr = (c_uint * max(1, self.n_in))(*[self.variables[n].valueReference for n in inputs])
-        self.in_val = (c_double * max(1, self.n_in))()
-        self.out_vr = (c_uint * max(1, self.n_out))(*[self.variables[n].valueReference for n in reads])
-        self.out_val = (c_double * max(1, self.n_out))()
+        self.channels: dict[str, Channel] = {}
+        self.input_slot, self.read_slot = {}, {}
+        for names, slots, direction in ((inputs, self.input_slot, "in"), (reads, self.read_slot, "out")):
+            for name in names:
+                family = self.family(name)
+                channel = self.channels.get(family.name) or self.channels.setdefault(family.name, Channel(family))
+                group = channel.in_names if direction == "in" else channel.out_names
+                slots[name] = (family.name, len(group))
+                group.append(name)
+        self.channels.setdefault(self.real, Channel(self.family_table[self.real]))
+        for channel in self.channels.values():
+            channel.allocate(self.variables, self._raw_function, self.fmi3)
+        real = self.channels[self.real]
+        self.n_in, self.n_out = real.n_in, real.n_out
+        self.n_in_arg, self.n_out_arg = real.n_in_arg, real.n_out_arg
+        self.in_vr, self.in_val, self.out_vr, self.out_val = real.in_vr, real.in_val, real.out_vr, real.out_val
+        self.set_real, self.get_real = real.setter, real.getter
+        self._setters = [c for c in self.channels.values() if c.n_in]
+        self._getters = [c for c in self.channels.values() if c.n_out]
+
+    def _raw_function(self, name: str):
+        return _raw(self.fmu.dll, f"{self.prefix}{name}")
+
+    def value(self, name: str):
+        """The value of read variable ``name`` as last read (a Python value; strings decoded)."""
+        family, index = self.read_slot[name]
+        value = self.channels[family].out_val[index]
+        return (value or b"").decode(errors="replace") if family == "String" else value
 
     # ----------------------------------------------------------------------------- calls
     def check(self, status: int, call: str) -> None:
@@ -139,29 +210,31 @@ class Unit:
             raise FMUFailure(self, call, status)
 
     def set_inputs(self) -> None:
-        if self.n_in:
-            self.check(self.set_real(self.c, self.in_vr, self.n_in_arg, self.in_val), "fmi2SetReal")
+        for channel in self._setters:
+            self.check(channel.set(self.c), f"{self.prefix}Set{channel.family.name}")
 
     def read(self) -> None:
-        if self.n_out:
-            self.check(self.get_real(self.c, self.out_vr, self.n_out_arg, self.out_val), "fmi2GetReal")
+        for channel in self._getters:
+            self.check(channel.get(self.c), f"{self.prefix}Get{channel.family.name}")
 
     def apply_values(self, values: dict) -> None:
-        """Set start values/parameters by name, each with the setter of its type."""
+        """Set start values/parameters by name, each with the setter of its type (Enumeration values
+        may be item names)."""
         for name, value in values.items():
             variable = self.variable(name)
-            vr = [variable.valueReference]
+            family = self.family(name)
+            call = f"{self.prefix}Set{family.name}({name}={value!r})"
             try:
-                if variable.type == "Real":
-                    self.fmu.setReal(vr, [float(value)])
-                elif variable.type in ("Integer", "Enumeration"):
-                    self.fmu.setInteger(vr, [int(value)])
-                elif variable.type == "Boolean":
-                    self.fmu.setBoolean(vr, [bool(value)])
-                else:
-                    self.fmu.setString(vr, [str(value)])
-            except Exception as error:  # fmpy raises FMICallException on a bad status
-                raise FMUFailure(self, f"fmi2Set{variable.type}({name}={value!r})", str(error)) from None
+                value = typed_value(value, kind_of(variable), enumeration_items(self.description, variable),
+                                    f"{self.name}.{name}")
+            except ValueError as error:
+                raise FMUFailure(self, call, str(error)) from None
+            array = (family.ctype * 1)(value.encode() if family.name == "String" else value)
+            setter = self._raw_function(f"Set{family.name}")
+            extra = (c_size_t(1),) if self.fmi3 else ()
+            status = setter(self.c, (c_uint * 1)(variable.valueReference), c_size_t(1), array, *extra)
+            if status > 1:
+                raise FMUFailure(self, call, status)
 
     def setup(self, start_time: float) -> None:
         self._call("fmi2SetupExperiment", self.fmu.setupExperiment, startTime=start_time)
@@ -170,22 +243,46 @@ class Unit:
         self._call("fmi2EnterInitializationMode", self.fmu.enterInitializationMode)
 
     def exit_initialization(self, start_time: float, tolerance: float) -> None:
-        self._call("fmi2ExitInitializationMode", self.fmu.exitInitializationMode)
+        self._call(f"{self.prefix}ExitInitializationMode", self.fmu.exitInitializationMode)
 
     def reset(self) -> None:
-        self._call("fmi2Reset", self.fmu.reset)
+        self._call(f"{self.prefix}Reset", self.fmu.reset)
+        self.terminated_at = None
 
-    def step(self, t: float, h: float) -> None:
+    def step(self, t: float, h: float) -> bool:
+        """One step; True when the FMU asked to end the simulation (``terminated_at`` says when)."""
         self.time_arg.value, self.step_arg.value = t, h
         status = self.do_step(self.c, self.time_arg, self.step_arg, 0)
-        if status > 1:
+        return status > 1 and self.stop_or_fail(t, h, status)
+
+    def stop_or_fail(self, t: float, h: float, status: int) -> bool:
+        """After fmi2DoStep returned ``status`` > fmi2Warning: True, with ``terminated_at`` set, if
+        it was fmi2Discard and the FMU asks to terminate (fmi2GetBooleanStatus(fmi2Terminated),
+        FMI 2.0 sec. 4.2.3) at a time it reached; else FMUFailure. The end time is
+        fmi2LastSuccessfulTime where the FMU reports it, else the end of the step. A step that made
+        no progress (fmi2LastSuccessfulTime = its start: pythonfmu's answer when ``do_step`` returns
+        False) failed: it is an error, as is any other status."""
+        if status != 2:
             raise FMUFailure(self, "fmi2DoStep", status, time=t)
+        flag, when = c_int(0), c_double(t + h)
+        boolean_status, real_status = _raw(self.fmu.dll, "fmi2GetBooleanStatus"), _raw(self.fmu.dll, "fmi2GetRealStatus")
+        if boolean_status is None or boolean_status(self.c, c_int(3), byref(flag)) > 1 or not flag.value:  # fmi2Terminated
+            raise FMUFailure(self, "fmi2DoStep", status, time=t)
+        if real_status is None or real_status(self.c, c_int(2), byref(when)) > 1 or not t <= when.value <= t + h:
+            when.value = t + h  # fmi2LastSuccessfulTime not reported: the step's end
+        if when.value <= t and h > 0:
+            raise FMUFailure(self, "fmi2DoStep", status, time=t)
+        self.terminated_at = when.value
+        self.termination_call = "fmi2DoStep returned fmi2Discard and fmi2Terminated is true"
+        return True
 
     def save_state(self) -> None:
-        self.check(self.fmu.dll.fmi2GetFMUstate(self.c, byref(self._state)), "fmi2GetFMUstate")
+        call = self.state_calls[0]
+        self.check(getattr(self.fmu.dll, call)(self.c, byref(self._state)), call)
 
     def restore_state(self) -> None:
-        self.check(self.fmu.dll.fmi2SetFMUstate(self.c, self._state), "fmi2SetFMUstate")
+        call = self.state_calls[1]
+        self.check(getattr(self.fmu.dll, call)(self.c, self._state), call)
 
     def _call(self, call: str, function, *args, **kwargs):
         try:
@@ -199,14 +296,14 @@ class Unit:
         if self.fmu is None:
             return
         if self._state:
-            self.fmu.dll.fmi2FreeFMUstate(self.c, byref(self._state))
+            getattr(self.fmu.dll, self.state_calls[2])(self.c, byref(self._state))
         try:
             self.fmu.terminate()
         except Exception:  # noqa: BLE001 - terminating after an error may itself fail; free anyway
             pass
         self.fmu.freeInstance()
         self.fmu = None
-        _MESSAGE_QUEUES.pop(id(self.messages), None)
+        self.queues.pop(id(self.messages), None)
 
 
 def _raw(dll, name: str):
@@ -242,7 +339,7 @@ class ModelExchangeUnit(Unit):
 
     def configure(self, inputs, reads):
         super().configure(inputs, reads)
-        self._held = [math.nan] * self.n_in
+        self._held = None
 
     def exit_initialization(self, start_time: float, tolerance: float) -> None:
         from fmpy.sundials import CVodeSolver
@@ -250,35 +347,50 @@ class ModelExchangeUnit(Unit):
         super().exit_initialization(start_time, tolerance)
         self.time = start_time
         self._event_iteration()
-        self._call("fmi2EnterContinuousTimeMode", self.fmu.enterContinuousTimeMode)
+        if self.terminated_at is not None:
+            return
+        self._call(f"{self.prefix}EnterContinuousTimeMode", self.fmu.enterContinuousTimeMode)
         fmu, description = self.fmu, self.description
         self.solver = CVodeSolver(
             nx=description.numberOfContinuousStates, nz=description.numberOfEventIndicators,
-            get_x=fmu.getContinuousStates, set_x=fmu.setContinuousStates, get_dx=fmu.getDerivatives,
+            get_x=fmu.getContinuousStates, set_x=fmu.setContinuousStates, get_dx=self._derivatives_function(),
             get_z=fmu.getEventIndicators, get_nominals=fmu.getNominalsOfContinuousStates,
             set_time=fmu.setTime, input=_HeldInputs(), startTime=start_time,
             relativeTolerance=tolerance, maxNumSteps=100000,
         )
-        self._held = [math.nan] * self.n_in
+        self._held = None
+
+    def _derivatives_function(self):
+        return self.fmu.getDerivatives
+
+    def _discrete_states(self):
+        """fmi2NewDiscreteStates (FMI 3.0: fmi3UpdateDiscreteStates): (needed, terminate,
+        nominals changed, values changed, next event time defined, next event time)."""
+        return "fmi2NewDiscreteStates", self.fmu.newDiscreteStates
 
     def _event_iteration(self) -> None:
-        """fmi2NewDiscreteStates until the FMU needs no more; remember its next time event."""
+        """fmi2NewDiscreteStates until the FMU needs no more; remember its next time event, or that
+        it asked to end the simulation (``terminated_at``)."""
         needed, terminate = True, False
+        call, function = self._discrete_states()
         while needed and not terminate:
-            needed, terminate, _, _, defined, next_time = self._call("fmi2NewDiscreteStates", self.fmu.newDiscreteStates)
+            needed, terminate, _, _, defined, next_time = self._call(call, function)
         if terminate:
-            raise FMUFailure(self, "fmi2NewDiscreteStates", "terminateSimulation")
+            self.terminated_at = self.time
+            self.termination_call = f"{call} set terminateSimulation"
         self.next_event_time = next_time if defined else math.inf
 
-    def step(self, t: float, h: float) -> None:
+    def step(self, t: float, h: float) -> bool:
+        """Integrate over [t, t + h]; True when the FMU asked to end the simulation on the way."""
         try:
             self._integrate(t, h)
         except FMUFailure as failure:
             failure.time = t if failure.time is None else failure.time
             raise
+        return self.terminated_at is not None
 
     def _integrate(self, t: float, h: float) -> None:
-        held = list(self.in_val[: self.n_in])
+        held = [list(channel.in_val[: channel.n_in]) for channel in self._setters]
         if held != self._held:
             # A changed input is a discontinuity of the right-hand side: restart the integrator
             # there rather than let it interpolate across the jump.
@@ -289,15 +401,20 @@ class ModelExchangeUnit(Unit):
         while t_end - time > tiny:
             t_next = min(t_end, self.next_event_time)
             state_event, _, time = self._call("CVode", self.solver.step, time, t_next)
-            self._call("fmi2SetTime", self.fmu.setTime, time)
-            step_event, terminate = self._call("fmi2CompletedIntegratorStep", self.fmu.completedIntegratorStep)
+            self._call(f"{self.prefix}SetTime", self.fmu.setTime, time)
+            step_event, terminate = self._call(f"{self.prefix}CompletedIntegratorStep", self.fmu.completedIntegratorStep)
+            self.time = time
             if terminate:
-                raise FMUFailure(self, "fmi2CompletedIntegratorStep", "terminateSimulation")
+                self.terminated_at = time
+                self.termination_call = f"{self.prefix}CompletedIntegratorStep set terminateSimulation"
+                return
             time_event = abs(time - self.next_event_time) <= tiny
             if state_event or step_event or time_event:
-                self._call("fmi2EnterEventMode", self.fmu.enterEventMode)
+                self._call(f"{self.prefix}EnterEventMode", self.fmu.enterEventMode)
                 self._event_iteration()
-                self._call("fmi2EnterContinuousTimeMode", self.fmu.enterContinuousTimeMode)
+                if self.terminated_at is not None:
+                    return
+                self._call(f"{self.prefix}EnterContinuousTimeMode", self.fmu.enterContinuousTimeMode)
                 self.solver.reset(time)
         self.time = t_end
 
@@ -308,7 +425,7 @@ class ModelExchangeUnit(Unit):
     def restore_state(self) -> None:
         super().restore_state()
         self.time = self._saved_time
-        self._held = [math.nan] * self.n_in  # re-initialise the integrator at the restored point
+        self._held = None  # re-initialise the integrator at the restored point
 
 
 def load_units(components: list[tuple[str, Path]], model_exchange: set[str]) -> tuple[list[Unit], list[str]]:
@@ -324,16 +441,22 @@ def load_units(components: list[tuple[str, Path]], model_exchange: set[str]) -> 
                 folders.append(folder)
                 extracted[fmu] = (folder, description)
             folder, description = extracted[fmu]
-            if description.fmiVersion != "2.0":
-                raise ValueError(f"component {name!r}: {fmu.name} is FMI {description.fmiVersion}; the master runs FMI 2.0")
+            if description.fmiVersion == "2.0":
+                cs, me = Unit, ModelExchangeUnit
+            elif description.fmiVersion.startswith("3."):
+                from shapefmu.cosim.units3 import ModelExchangeUnit3, Unit3
+
+                cs, me = Unit3, ModelExchangeUnit3
+            else:
+                raise ValueError(f"component {name!r}: {fmu.name} is FMI {description.fmiVersion}; the master runs FMI 2.0 and 3.0")
             if name in model_exchange:
                 if description.modelExchange is None:
                     raise ValueError(f"component {name!r}: {fmu.name} has no Model Exchange interface")
-                units.append(ModelExchangeUnit(name, fmu, folder, description))
+                units.append(me(name, fmu, folder, description))
             elif description.coSimulation is not None:
-                units.append(Unit(name, fmu, folder, description))
+                units.append(cs(name, fmu, folder, description))
             elif description.modelExchange is not None:
-                units.append(ModelExchangeUnit(name, fmu, folder, description))
+                units.append(me(name, fmu, folder, description))
             else:
                 raise ValueError(f"component {name!r}: {fmu.name} has neither a Co-Simulation nor a Model Exchange interface")
     except BaseException:

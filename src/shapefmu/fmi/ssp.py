@@ -33,6 +33,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from xml.etree import ElementTree as ET
 
+from shapefmu.fmi.ssp_targets import for_target
+from shapefmu.fmi.variable_types import KINDS, enumeration_items, kind_of, typed_value
+
 SSD = "http://ssp-standard.org/SSP1/SystemStructureDescription"
 SSC = "http://ssp-standard.org/SSP1/SystemStructureCommon"
 SSV = "http://ssp-standard.org/SSP1/SystemStructureParameterValues"
@@ -40,11 +43,10 @@ NAMESPACES = {"ssd": SSD, "ssc": SSC, "ssv": SSV}
 for _prefix, _uri in NAMESPACES.items():
     ET.register_namespace(_prefix, _uri)
 
-TYPES = ("Real", "Integer", "Boolean", "String")
+TYPES = KINDS
 # Name of every parameter set we write. ecos applies parameter sets by name at initialisation
 # (``EcosSimulation.init(parameter_set=PARAMETER_SET)``); libcosim applies every binding.
 PARAMETER_SET = "parameters"
-_PYTHON_TYPES = {"Real": float, "Integer": int, "Boolean": bool, "String": str}
 
 
 @dataclass
@@ -53,7 +55,10 @@ class Connector:
 
     name: str
     kind: str  # input | output | parameter | calculatedParameter | inout
-    type: str = "Real"
+    type: str = "Real"  # Real | Integer | Boolean | String | Enumeration
+    declared_type: str | None = None  # an Enumeration's type name
+    items: dict[str, int] = field(default_factory=dict)  # an Enumeration's {item: value}
+    start: str | None = None  # the FMU's start value, as written in its modelDescription.xml
 
 
 @dataclass
@@ -103,8 +108,11 @@ def _fmu_connectors(fmu: Path) -> dict[str, Connector]:
     description = read_model_description(str(fmu), validate=False)
     connectors = {}
     for variable in description.modelVariables:
-        if variable.causality in ("input", "output", "parameter", "calculatedParameter") and variable.type in TYPES:
-            connectors[variable.name] = Connector(variable.name, variable.causality, variable.type)
+        kind = kind_of(variable)
+        if variable.causality in ("input", "output", "parameter", "calculatedParameter") and kind and not variable.shape:
+            declared = variable.declaredType.name if kind == "Enumeration" and variable.declaredType else None
+            connectors[variable.name] = Connector(variable.name, variable.causality, kind, declared,
+                                                  enumeration_items(description, variable), variable.start)
     return connectors
 
 
@@ -120,6 +128,8 @@ class System:
         self.start_time = 0.0
         self.stop_time: float | None = None
         self.annotations: list[ET.Element] = []  # kept from the file, written back unchanged
+        self.system_annotations: list[ET.Element] = []  # those of the ssd:System element, likewise
+        self.experiment_annotations: list[ET.Element] = []  # those of ssd:DefaultExperiment, likewise
         self.origin = "<System>"  # the file this system was read from, for error messages
 
     # ----------------------------------------------------------------------------- building
@@ -194,8 +204,11 @@ class System:
                     f"a connection {role} must be one of {allowed}"
                 )
             ends.append(connector)
-        if ends[0].type != ends[1].type:
-            raise ValueError(f"{where}: type mismatch, {ends[0].type} {connection.start} -> {ends[1].type} {connection.end}")
+        if (ends[0].type, ends[0].declared_type) != (ends[1].type, ends[1].declared_type):
+            def typed(connector, reference):
+                return f"{connector.type}{' ' + connector.declared_type if connector.declared_type else ''} {reference}"
+
+            raise ValueError(f"{where}: type mismatch, {typed(ends[0], connection.start)} -> {typed(ends[1], connection.end)}")
         if ends[0].type != "Real" and (connection.factor != 1.0 or connection.offset != 0.0):
             raise ValueError(f"{where}: a linear transformation needs Real connectors, got {ends[0].type}")
         already = seen if seen is not None else {c.end: c for c in self.connections}
@@ -210,23 +223,29 @@ class System:
             connector = component.connectors.get(name)
             if connector is None:
                 raise ValueError(f"{where}: FMU {component.fmu.name} has no parameter or input {name!r}")
-            try:
-                checked[name] = _PYTHON_TYPES[connector.type](value)
-            except (TypeError, ValueError):
-                raise ValueError(f"{where}: parameter {name!r} must be {connector.type}, got {value!r}") from None
+            checked[name] = typed_value(value, connector.type, connector.items, f"{where}: parameter {name!r}")
         return checked
 
     # ----------------------------------------------------------------------------- writing
-    def write_ssd(self, path) -> Path:
-        """Write ``SystemStructure.ssd``-style XML to ``path``; FMU sources relative to its folder."""
+    def write_ssd(self, path, *, target: str | None = None, step: float | None = None, fold: dict | None = None) -> Path:
+        """Write ``SystemStructure.ssd``-style XML to ``path``; FMU sources relative to its folder.
+
+        ``target="omsimulator"`` writes the system as OpenModelica's OMSimulator imports it, with
+        its fixed macro ``step`` (s) and ``fold`` for linear transformations: see
+        :func:`shapefmu.fmi.ssp_targets.for_target`. The default target (None) writes what
+        libcosim and ecos read.
+        """
+        self = for_target(self, target, step, fold)
         path = Path(path)
         sources = {name: os.path.relpath(c.fmu, path.parent.resolve()) for name, c in self.components.items()}
         ssv = {name: [os.path.relpath(s, path.parent.resolve()) for s in c.ssv_sources] for name, c in self.components.items()}
         path.write_bytes(self._xml(sources, ssv))
         return path
 
-    def write_ssp(self, path) -> Path:
-        """Write an .ssp archive: SystemStructure.ssd plus the FMUs and .ssv files under resources/."""
+    def write_ssp(self, path, *, target: str | None = None, step: float | None = None, fold: dict | None = None) -> Path:
+        """Write an .ssp archive: SystemStructure.ssd plus the FMUs and .ssv files under resources/
+        (``target``, ``step``, ``fold``: as for :meth:`write_ssd`)."""
+        self = for_target(self, target, step, fold)
         path = Path(path)
         names: dict[Path, str] = {}
         sources, ssv = {}, {}
@@ -249,7 +268,9 @@ class System:
             connectors = ET.SubElement(item, f"{{{SSD}}}Connectors")
             for connector in component.connectors.values():
                 node = ET.SubElement(connectors, f"{{{SSD}}}Connector", {"name": connector.name, "kind": connector.kind})
-                ET.SubElement(node, f"{{{SSC}}}{connector.type}")
+                typed = ET.SubElement(node, f"{{{SSC}}}{connector.type}")
+                if connector.declared_type:
+                    typed.set("name", connector.declared_type)  # refers to an ssc:Enumeration below
             if component.parameters or ssv[name]:
                 bindings = ET.SubElement(item, f"{{{SSD}}}ParameterBindings")
                 for source in ssv[name]:
@@ -267,10 +288,19 @@ class System:
             })
             if c.factor != 1.0 or c.offset != 0.0:
                 ET.SubElement(node, f"{{{SSC}}}LinearTransformation", {"factor": repr(c.factor), "offset": repr(c.offset)})
+        system.extend(copy.deepcopy(self.system_annotations))
+        enumerations = {c.declared_type: c.items for component in self.components.values()
+                        for c in component.connectors.values() if c.declared_type}
+        if enumerations:
+            node = ET.SubElement(root, f"{{{SSD}}}Enumerations")
+            for name, items in enumerations.items():
+                enumeration = ET.SubElement(node, f"{{{SSC}}}Enumeration", {"name": name})
+                for item, value in items.items():
+                    ET.SubElement(enumeration, f"{{{SSC}}}Item", {"name": item, "value": str(value)})
         experiment = {"startTime": repr(self.start_time)}
         if self.stop_time is not None:
             experiment["stopTime"] = repr(self.stop_time)
-        ET.SubElement(root, f"{{{SSD}}}DefaultExperiment", experiment)
+        ET.SubElement(root, f"{{{SSD}}}DefaultExperiment", experiment).extend(copy.deepcopy(self.experiment_annotations))
         root.extend(copy.deepcopy(self.annotations))
         ET.indent(root)
         return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
@@ -291,6 +321,8 @@ def _parameter_set(name: str, values: dict, connectors: dict[str, Connector] | N
     for key, value in values.items():
         kind = connectors[key].type if connectors and key in connectors else _type_of(value)
         text = str(value).lower() if kind == "Boolean" else (repr(float(value)) if kind == "Real" else str(value))
+        if kind == "Enumeration":  # an ssv:Enumeration value is the item's name
+            text = {number: item for item, number in connectors[key].items.items()}.get(value, text)
         node = ET.SubElement(parameters, f"{{{SSV}}}Parameter", {"name": key})
         ET.SubElement(node, f"{{{SSV}}}{kind}", {"value": text})
     return parameter_set
@@ -349,7 +381,7 @@ def _parameter_values(parameter_set: ET.Element, where: str) -> dict:
             text = typed.get("value")
             kind = _local(typed.tag)
             try:
-                values[name] = {"Real": float, "Integer": int, "String": str,
+                values[name] = {"Real": float, "Integer": int, "String": str, "Enumeration": str,
                                 "Boolean": lambda s: {"true": True, "false": False, "1": True, "0": False}[s]}[kind](text)
             except (KeyError, ValueError):
                 raise ValueError(f"{where}: Parameter {name!r} has an invalid {kind} value {text!r}") from None
@@ -460,7 +492,9 @@ def _read_ssd(ssd: Path, origin: str) -> System:
         system.start_time = float(experiment.get("startTime", 0.0))
         if experiment.get("stopTime") is not None:
             system.stop_time = float(experiment.get("stopTime"))
+        system.experiment_annotations = [copy.deepcopy(a) for a in experiment if _local(a.tag) == "Annotations"]
     system.annotations = [copy.deepcopy(a) for a in root if _local(a.tag) == "Annotations"]
+    system.system_annotations = [copy.deepcopy(a) for a in node if _local(a.tag) == "Annotations"]
     return system
 
 

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import fmpy
 
-from shapefmu.fmi.native import description, linear
+from shapefmu.fmi.native import description, description3, linear
 from shapefmu.fmi.native.codegen import write_sources
 from shapefmu.fmi.native.model_part import ModelPart, check_name
 from shapefmu.fmi.native.nonlinear import NonlinearPlant
@@ -25,6 +25,11 @@ from shapefmu.plants import as_plant
 WRAPPER_SOURCES = ("plant_fmi2.c", "plant_expm.c")
 WRAPPER_HEADERS = ("plant_model.h", "plant_expm.h", "fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")
 COMPILE_FLAGS = ("-O2", "-shared", "-fPIC", "-std=c99", "-fvisibility=hidden")
+# The FMI 3.0 target: the same model part and numerics behind an FMI 3.0 wrapper.
+WRAPPER_SOURCES_3 = ("plant_fmi3.c", "plant_fmi3_refused.c", "plant_expm.c")
+WRAPPER_HEADERS_3 = ("plant_model.h", "plant_expm.h", "plant_fmi3.h", "fmi3Functions.h", "fmi3FunctionTypes.h",
+                     "fmi3PlatformTypes.h")
+FMI_VERSIONS = ("2.0", "3.0")
 
 
 def _from_model_file(path: Path, name: str | None) -> ModelPart:
@@ -63,12 +68,19 @@ def _compile(sources: Path, binary: Path, c_files: list[str]) -> None:
         raise ValueError(f"compiling the plant FMU failed ({' '.join(command)}):\n{completed.stderr}")
 
 
-def build_plant_fmu(model, out_path, *, name: str | None = None) -> Path:
-    """Generate, compile and zip a plant FMU (FMI 2.0 Model Exchange + Co-Simulation); returns its path.
+def build_plant_fmu(model, out_path, *, name: str | None = None, fmi_version: str = "2.0") -> Path:
+    """Generate, compile and zip a plant FMU (Model Exchange + Co-Simulation); returns its path.
 
     ``model`` is a model file (``models/*.toml``), a ``Plant``, a python-control LTI or a
-    ``NonlinearPlant``; ``name`` replaces the model's name (and the FMU's model identifier).
+    ``NonlinearPlant``; ``name`` replaces the model's name (and the FMU's model identifier);
+    ``fmi_version`` is "2.0" (default) or "3.0" (the same variables as Float64, the same
+    Co-Simulation step: the two give identical numbers).
     """
+    if fmi_version not in FMI_VERSIONS:
+        raise ValueError(f"fmi_version must be one of {FMI_VERSIONS}, got {fmi_version!r}")
+    fmi3 = fmi_version == "3.0"
+    wrapper_sources = WRAPPER_SOURCES_3 if fmi3 else WRAPPER_SOURCES
+    describe = description3.model_description if fmi3 else description.model_description
     part = to_model_part(model, name)
     out_path = Path(out_path)
     identifier = description.model_identifier(part)
@@ -77,19 +89,18 @@ def build_plant_fmu(model, out_path, *, name: str | None = None) -> Path:
         sources = root / "sources"
         sources.mkdir()
         package = resources.files("shapefmu.fmi.native") / "c"
-        for file in WRAPPER_SOURCES + WRAPPER_HEADERS:
+        for file in wrapper_sources + (WRAPPER_HEADERS_3 if fmi3 else WRAPPER_HEADERS):
             (sources / file).write_bytes((package / file).read_bytes())
         # The GUID hashes the sources, which include the GUID: generate with a placeholder first.
         generated = write_sources(part, "", sources)
-        c_files = [*WRAPPER_SOURCES, *generated]
+        c_files = [*wrapper_sources, *generated]
         guid = description.guid_of(part, {f: (sources / f).read_text(encoding="utf-8") for f in c_files})
         write_sources(part, guid, sources)
         (sources / "buildDescription.xml").write_text(description.build_description(part, tuple(c_files)), encoding="utf-8")
-        binaries = root / "binaries" / fmpy.platform
+        binaries = root / "binaries" / (fmpy.platform_tuple if fmi3 else fmpy.platform)
         binaries.mkdir(parents=True)
         _compile(sources, binaries / f"{identifier}{fmpy.sharedLibraryExtension}", c_files)
-        (root / "modelDescription.xml").write_text(description.model_description(part, guid, tuple(c_files)),
-                                                   encoding="utf-8")
+        (root / "modelDescription.xml").write_text(describe(part, guid, tuple(c_files)), encoding="utf-8")
         out_path.parent.mkdir(parents=True, exist_ok=True)
         partial = out_path.with_name(out_path.name + ".partial")
         with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as archive:

@@ -1,0 +1,63 @@
+"""The kinds of FMI variables as SSP connectors see them, and values typed by them.
+
+An FMI 2.0 or 3.0 variable has one of the SSP 1.0 connector kinds ``Real``, ``Integer``,
+``Boolean``, ``String`` or ``Enumeration`` (FMI 3.0 ``Float32``/``Float64`` are Real, its integer
+types Integer). :func:`typed_value` turns a value given by a user -- the text of ``--set`` or of a
+parameter file, or a Python value -- into the Python value of a variable of that kind, refusing
+what does not fit with a message naming the variable, the value and what is valid.
+"""
+
+from __future__ import annotations
+
+# SSP connector kind of each FMI variable type.
+KIND = {"Real": "Real", "Float64": "Real", "Float32": "Real", "Integer": "Integer", "Enumeration": "Enumeration",
+        "Boolean": "Boolean", "String": "String",
+        **{t: "Integer" for t in ("Int8", "UInt8", "Int16", "UInt16", "Int32", "UInt32", "Int64", "UInt64")}}
+KINDS = ("Real", "Integer", "Boolean", "String", "Enumeration")
+
+
+def kind_of(variable) -> str | None:
+    """The SSP connector kind of an fmpy ModelVariable, or None for a type with none (Binary, Clock)."""
+    return KIND.get(variable.type)
+
+
+_TRUE, _FALSE = ("true", "1"), ("false", "0")
+
+
+def typed_value(value, kind: str, items: dict[str, int] | None = None, what: str = "value"):
+    """``value`` (a Python value or the text of a command line / parameter file) as the Python value
+    of an FMI variable of ``kind``; an Enumeration takes an item name (``items``) or its integer."""
+    text = value.strip() if isinstance(value, str) else None
+    try:
+        if kind == "Real":
+            if isinstance(value, bool):
+                raise ValueError
+            return float(text if text is not None else value)
+        if kind == "String":
+            return str(value)
+        if kind == "Boolean":
+            if text is not None and text.lower() in _TRUE + _FALSE:
+                return text.lower() in _TRUE
+            if isinstance(value, bool) or (isinstance(value, (int, float)) and value in (0, 1)):
+                return bool(value)
+            raise ValueError
+        if kind == "Enumeration" and text is not None and items and text in items:
+            return items[text]
+        number = int(text) if text is not None else value
+        if isinstance(number, bool) or not isinstance(number, int) and not (isinstance(number, float) and number.is_integer()):
+            raise ValueError
+        number = int(number)
+        if kind == "Enumeration" and items and number not in items.values():
+            raise ValueError
+        return number
+    except (TypeError, ValueError):
+        valid = {"Real": "a number", "Integer": "an integer", "Boolean": "true, false, 1 or 0", "String": "text",
+                 "Enumeration": f"one of {', '.join(items)} or its number" if items else "an integer"}[kind]
+        raise ValueError(f"{what} must be {valid} ({kind}), got {value!r}") from None
+
+
+def enumeration_items(description, variable) -> dict[str, int]:
+    """``{item name: value}`` of an Enumeration variable's declared type ({} for other types)."""
+    if variable.type != "Enumeration" or variable.declaredType is None:
+        return {}
+    return {item.name: int(item.value) for item in variable.declaredType.items}

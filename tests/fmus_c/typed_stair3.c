@@ -1,0 +1,378 @@
+/* TypedStair3: TypedStair (typed_stair.c, the same model: typed_stair_model.h) as an FMI 3.0 Model
+ * Exchange + Co-Simulation FMU, with Float64, Int32, Enumeration (fmi3GetInt64), Boolean and String
+ * variables. At t = stop_at it asks to end the simulation: fmi3DoStep returns terminateSimulation
+ * with lastSuccessfulTime = stop_at; in Model Exchange stop_at is a time event whose
+ * fmi3UpdateDiscreteStates sets terminateSimulation.
+ *
+ * Value references (unique in FMI 3.0): Float64 0 time, 1 + the Real index of typed_stair_model.h;
+ * Int32 10 + the Integer index of increment, n_in, counter, n_out; Enumeration (Int64) 10 + the
+ * Integer index of mode, e_in, e_out; Boolean 20 + index; String 30 + index.
+ */
+#include <stdlib.h>
+
+#include "fmi3Functions.h"
+#include "typed_stair_model.h"
+
+#define TOKEN "{6f1c2b7e-typed-stair-0003}"
+
+typedef struct {
+    int model_exchange;
+    fmi3InstanceEnvironment environment;
+    fmi3LogMessageCallback log;
+    State s;
+} Instance;
+
+static fmi3Status refuse(Instance *inst, const char *function, const char *why) {
+    char message[400];
+    snprintf(message, sizeof message, "%s: %s", function, why);
+    if (inst != NULL && inst->log != NULL) inst->log(inst->environment, fmi3Error, "logStatusError", message);
+    return fmi3Error;
+}
+
+static Instance *instantiate(fmi3String token, int model_exchange, fmi3InstanceEnvironment environment,
+                             fmi3LogMessageCallback log) {
+    if (token == NULL || strcmp(token, TOKEN) != 0) {
+        if (log != NULL) log(environment, fmi3Error, "logStatusError", "instantiationToken does not match");
+        return NULL;
+    }
+    Instance *inst = calloc(1, sizeof(Instance));
+    if (inst == NULL) return NULL;
+    inst->model_exchange = model_exchange;
+    inst->environment = environment;
+    inst->log = log;
+    start_values(&inst->s);
+    return inst;
+}
+
+fmi3Instance fmi3InstantiateModelExchange(fmi3String name, fmi3String token, fmi3String resources, fmi3Boolean visible,
+                                          fmi3Boolean logging, fmi3InstanceEnvironment environment, fmi3LogMessageCallback log) {
+    (void)name; (void)resources; (void)visible; (void)logging;
+    return instantiate(token, 1, environment, log);
+}
+
+fmi3Instance fmi3InstantiateCoSimulation(fmi3String name, fmi3String token, fmi3String resources, fmi3Boolean visible,
+                                         fmi3Boolean logging, fmi3Boolean eventMode, fmi3Boolean earlyReturn,
+                                         const fmi3ValueReference required[], size_t nRequired,
+                                         fmi3InstanceEnvironment environment, fmi3LogMessageCallback log,
+                                         fmi3IntermediateUpdateCallback update) {
+    (void)name; (void)resources; (void)visible; (void)logging; (void)eventMode; (void)earlyReturn;
+    (void)required; (void)nRequired; (void)update;
+    return instantiate(token, 0, environment, log);
+}
+
+fmi3Instance fmi3InstantiateScheduledExecution(fmi3String name, fmi3String token, fmi3String resources, fmi3Boolean visible,
+                                               fmi3Boolean logging, fmi3InstanceEnvironment environment,
+                                               fmi3LogMessageCallback log, fmi3ClockUpdateCallback clock,
+                                               fmi3LockPreemptionCallback lock, fmi3UnlockPreemptionCallback unlock) {
+    (void)name; (void)token; (void)resources; (void)visible; (void)logging; (void)environment; (void)log;
+    (void)clock; (void)lock; (void)unlock;
+    return NULL;
+}
+
+void fmi3FreeInstance(fmi3Instance instance) { free(instance); }
+const char *fmi3GetVersion(void) { return fmi3Version; }
+
+fmi3Status fmi3SetDebugLogging(fmi3Instance instance, fmi3Boolean on, size_t n, const fmi3String categories[]) {
+    (void)on; (void)n; (void)categories;
+    return instance == NULL ? fmi3Error : fmi3OK;
+}
+
+fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean tolDefined, fmi3Float64 tol, fmi3Float64 start,
+                                       fmi3Boolean stopDefined, fmi3Float64 stop) {
+    Instance *inst = instance;
+    (void)tolDefined; (void)tol; (void)stopDefined; (void)stop;
+    if (inst == NULL) return fmi3Error;
+    inst->s.time = start;
+    return fmi3OK;
+}
+
+fmi3Status fmi3ExitInitializationMode(fmi3Instance instance) {
+    Instance *inst = instance;
+    if (inst == NULL) return fmi3Error;
+    if (!(inst->s.real[VR_PERIOD] > 0.0)) return refuse(inst, "fmi3ExitInitializationMode", "parameter period must be > 0");
+    inst->s.initialized = 1;
+    compute(&inst->s);
+    return fmi3OK;
+}
+
+fmi3Status fmi3EnterEventMode(fmi3Instance instance) { return instance == NULL ? fmi3Error : fmi3OK; }
+fmi3Status fmi3Terminate(fmi3Instance instance) { return instance == NULL ? fmi3Error : fmi3OK; }
+
+fmi3Status fmi3Reset(fmi3Instance instance) {
+    if (instance == NULL) return fmi3Error;
+    start_values(&((Instance *)instance)->s);
+    return fmi3OK;
+}
+
+/* ------------------------------------------------------------------ get / set */
+
+/* The storage of value reference vr of FMI type `type`, or NULL; *settable says whether it may be
+ * set now (inputs always, parameters before initialisation). */
+static void *slot(Instance *inst, fmi3ValueReference vr, char type, int *settable) {
+    State *s = &inst->s;
+    const int early = !s->initialized;
+    if (type == 'F' && vr == 0) { *settable = 0; return &s->time; }
+    if (type == 'F' && vr >= 1 && vr <= N_REAL) {
+        const int i = (int)vr - 1;
+        *settable = i == VR_X_IN || ((i == VR_PERIOD || i == VR_STOP_AT || i == VR_LEVEL) && early);
+        return &s->real[i];
+    }
+    const int i = (int)vr - 10;
+    if ((type == 'I' && i >= VR_INCREMENT && i <= VR_N_OUT) || (type == 'E' && i >= VR_MODE && i <= VR_E_OUT)) {
+        *settable = i == VR_N_IN || i == VR_E_IN || ((i == VR_INCREMENT || i == VR_MODE) && early);
+        return &s->integer[i];
+    }
+    if (type == 'B' && vr >= 20 && vr < 20 + N_BOOLEAN) {
+        *settable = vr == 20 + VR_B_IN || (vr == 20 + VR_NEGATE && early);
+        return &s->boolean[vr - 20];
+    }
+    if (type == 'S' && vr >= 30 && vr < 30 + N_STRING) {
+        *settable = vr == 30 + VR_S_IN || (vr == 30 + VR_LABEL && early);
+        return s->string[vr - 30];
+    }
+    return NULL;
+}
+
+#define ACCESSORS(NAME, TYPE, CODE, GET, SET)                                                       \
+    fmi3Status fmi3Get##NAME(fmi3Instance instance, const fmi3ValueReference vr[], size_t n, TYPE values[], size_t nValues) { \
+        Instance *inst = instance;                                                                  \
+        int settable;                                                                               \
+        if (inst == NULL || n != nValues) return refuse(inst, "fmi3Get" #NAME, "scalars only");     \
+        for (size_t i = 0; i < n; i++) {                                                            \
+            void *where = slot(inst, vr[i], CODE, &settable);                                       \
+            if (where == NULL) return refuse(inst, "fmi3Get" #NAME, "unknown value reference");     \
+            GET;                                                                                    \
+        }                                                                                           \
+        return fmi3OK;                                                                              \
+    }                                                                                               \
+    fmi3Status fmi3Set##NAME(fmi3Instance instance, const fmi3ValueReference vr[], size_t n, const TYPE values[], size_t nValues) { \
+        Instance *inst = instance;                                                                  \
+        int settable;                                                                               \
+        if (inst == NULL || n != nValues) return refuse(inst, "fmi3Set" #NAME, "scalars only");     \
+        for (size_t i = 0; i < n; i++) {                                                            \
+            void *where = slot(inst, vr[i], CODE, &settable);                                       \
+            if (where == NULL || !settable) return refuse(inst, "fmi3Set" #NAME, "not settable now"); \
+            SET;                                                                                    \
+        }                                                                                           \
+        compute(&inst->s);                                                                          \
+        return fmi3OK;                                                                              \
+    }
+
+ACCESSORS(Float64, fmi3Float64, 'F', values[i] = *(double *)where,
+          if (!isfinite(values[i])) return refuse(inst, "fmi3SetFloat64", "values must be finite");
+          *(double *)where = values[i])
+ACCESSORS(Int32, fmi3Int32, 'I', values[i] = *(int *)where, *(int *)where = values[i])
+ACCESSORS(Int64, fmi3Int64, 'E', values[i] = *(int *)where,
+          if (values[i] != 1 && values[i] != 2) return refuse(inst, "fmi3SetInt64", "a Direction is 1 (up) or 2 (down)");
+          *(int *)where = (int)values[i])
+ACCESSORS(Boolean, fmi3Boolean, 'B', values[i] = *(int *)where != 0, *(int *)where = values[i] ? 1 : 0)
+ACCESSORS(String, fmi3String, 'S', values[i] = (const char *)where,
+          if (values[i] == NULL || strlen(values[i]) >= TEXT) return refuse(inst, "fmi3SetString", "NULL or too long");
+          strcpy((char *)where, values[i]))
+
+#define NO_TYPE(NAME, TYPE)                                                                         \
+    fmi3Status fmi3Get##NAME(fmi3Instance instance, const fmi3ValueReference vr[], size_t n, TYPE values[], size_t m) { \
+        (void)vr; (void)values; (void)m;                                                            \
+        return n == 0 ? fmi3OK : refuse(instance, "fmi3Get" #NAME, "no such variables");            \
+    }                                                                                               \
+    fmi3Status fmi3Set##NAME(fmi3Instance instance, const fmi3ValueReference vr[], size_t n, const TYPE values[], size_t m) { \
+        (void)vr; (void)values; (void)m;                                                            \
+        return n == 0 ? fmi3OK : refuse(instance, "fmi3Set" #NAME, "no such variables");            \
+    }
+NO_TYPE(Float32, fmi3Float32)
+NO_TYPE(Int8, fmi3Int8)
+NO_TYPE(UInt8, fmi3UInt8)
+NO_TYPE(Int16, fmi3Int16)
+NO_TYPE(UInt16, fmi3UInt16)
+NO_TYPE(UInt32, fmi3UInt32)
+NO_TYPE(UInt64, fmi3UInt64)
+
+/* ------------------------------------------------------------------ not provided */
+
+#define NOT_PROVIDED(function, ...) { __VA_ARGS__; return refuse(instance, #function, "not provided"); }
+fmi3Status fmi3GetBinary(fmi3Instance instance, const fmi3ValueReference vr[], size_t n, size_t z[], fmi3Binary v[], size_t m)
+    NOT_PROVIDED(fmi3GetBinary, (void)vr; (void)n; (void)z; (void)v; (void)m)
+fmi3Status fmi3SetBinary(fmi3Instance instance, const fmi3ValueReference vr[], size_t n, const size_t z[], const fmi3Binary v[], size_t m)
+    NOT_PROVIDED(fmi3SetBinary, (void)vr; (void)n; (void)z; (void)v; (void)m)
+fmi3Status fmi3GetClock(fmi3Instance instance, const fmi3ValueReference vr[], size_t n, fmi3Clock v[])
+    NOT_PROVIDED(fmi3GetClock, (void)vr; (void)n; (void)v)
+fmi3Status fmi3SetClock(fmi3Instance instance, const fmi3ValueReference vr[], size_t n, const fmi3Clock v[])
+    NOT_PROVIDED(fmi3SetClock, (void)vr; (void)n; (void)v)
+fmi3Status fmi3GetNumberOfVariableDependencies(fmi3Instance instance, fmi3ValueReference vr, size_t *n)
+    NOT_PROVIDED(fmi3GetNumberOfVariableDependencies, (void)vr; (void)n)
+fmi3Status fmi3GetVariableDependencies(fmi3Instance instance, fmi3ValueReference d, size_t a[], fmi3ValueReference b[],
+                                       size_t c[], fmi3DependencyKind k[], size_t n)
+    NOT_PROVIDED(fmi3GetVariableDependencies, (void)d; (void)a; (void)b; (void)c; (void)k; (void)n)
+fmi3Status fmi3GetDirectionalDerivative(fmi3Instance instance, const fmi3ValueReference u[], size_t nu, const fmi3ValueReference k[],
+                                        size_t nk, const fmi3Float64 s[], size_t ns, fmi3Float64 r[], size_t nr)
+    NOT_PROVIDED(fmi3GetDirectionalDerivative, (void)u; (void)nu; (void)k; (void)nk; (void)s; (void)ns; (void)r; (void)nr)
+fmi3Status fmi3GetAdjointDerivative(fmi3Instance instance, const fmi3ValueReference u[], size_t nu, const fmi3ValueReference k[],
+                                    size_t nk, const fmi3Float64 s[], size_t ns, fmi3Float64 r[], size_t nr)
+    NOT_PROVIDED(fmi3GetAdjointDerivative, (void)u; (void)nu; (void)k; (void)nk; (void)s; (void)ns; (void)r; (void)nr)
+fmi3Status fmi3EnterConfigurationMode(fmi3Instance instance) NOT_PROVIDED(fmi3EnterConfigurationMode, (void)0)
+fmi3Status fmi3ExitConfigurationMode(fmi3Instance instance) NOT_PROVIDED(fmi3ExitConfigurationMode, (void)0)
+fmi3Status fmi3GetIntervalDecimal(fmi3Instance instance, const fmi3ValueReference vr[], size_t n, fmi3Float64 i[], fmi3IntervalQualifier q[])
+    NOT_PROVIDED(fmi3GetIntervalDecimal, (void)vr; (void)n; (void)i; (void)q)
+fmi3Status fmi3GetIntervalFraction(fmi3Instance instance, const fmi3ValueReference vr[], size_t n, fmi3UInt64 c[], fmi3UInt64 r[],
+                                   fmi3IntervalQualifier q[])
+    NOT_PROVIDED(fmi3GetIntervalFraction, (void)vr; (void)n; (void)c; (void)r; (void)q)
+fmi3Status fmi3GetShiftDecimal(fmi3Instance instance, const fmi3ValueReference vr[], size_t n, fmi3Float64 s[])
+    NOT_PROVIDED(fmi3GetShiftDecimal, (void)vr; (void)n; (void)s)
+fmi3Status fmi3GetShiftFraction(fmi3Instance instance, const fmi3ValueReference vr[], size_t n, fmi3UInt64 c[], fmi3UInt64 r[])
+    NOT_PROVIDED(fmi3GetShiftFraction, (void)vr; (void)n; (void)c; (void)r)
+fmi3Status fmi3SetIntervalDecimal(fmi3Instance instance, const fmi3ValueReference vr[], size_t n, const fmi3Float64 i[])
+    NOT_PROVIDED(fmi3SetIntervalDecimal, (void)vr; (void)n; (void)i)
+fmi3Status fmi3SetIntervalFraction(fmi3Instance instance, const fmi3ValueReference vr[], size_t n, const fmi3UInt64 c[], const fmi3UInt64 r[])
+    NOT_PROVIDED(fmi3SetIntervalFraction, (void)vr; (void)n; (void)c; (void)r)
+fmi3Status fmi3SetShiftDecimal(fmi3Instance instance, const fmi3ValueReference vr[], size_t n, const fmi3Float64 s[])
+    NOT_PROVIDED(fmi3SetShiftDecimal, (void)vr; (void)n; (void)s)
+fmi3Status fmi3SetShiftFraction(fmi3Instance instance, const fmi3ValueReference vr[], size_t n, const fmi3UInt64 c[], const fmi3UInt64 r[])
+    NOT_PROVIDED(fmi3SetShiftFraction, (void)vr; (void)n; (void)c; (void)r)
+fmi3Status fmi3ActivateModelPartition(fmi3Instance instance, fmi3ValueReference c, fmi3Float64 t)
+    NOT_PROVIDED(fmi3ActivateModelPartition, (void)c; (void)t)
+fmi3Status fmi3GetOutputDerivatives(fmi3Instance instance, const fmi3ValueReference vr[], size_t n, const fmi3Int32 o[],
+                                    fmi3Float64 v[], size_t m)
+    NOT_PROVIDED(fmi3GetOutputDerivatives, (void)vr; (void)n; (void)o; (void)v; (void)m)
+
+/* ------------------------------------------------------------------ FMU state: a copy of State */
+
+fmi3Status fmi3GetFMUState(fmi3Instance instance, fmi3FMUState *state) {
+    if (instance == NULL || state == NULL) return fmi3Error;
+    if (*state == NULL && (*state = malloc(sizeof(State))) == NULL) return refuse(instance, "fmi3GetFMUState", "out of memory");
+    memcpy(*state, &((Instance *)instance)->s, sizeof(State));
+    return fmi3OK;
+}
+
+fmi3Status fmi3SetFMUState(fmi3Instance instance, fmi3FMUState state) {
+    if (instance == NULL || state == NULL) return fmi3Error;
+    memcpy(&((Instance *)instance)->s, state, sizeof(State));
+    return fmi3OK;
+}
+
+fmi3Status fmi3FreeFMUState(fmi3Instance instance, fmi3FMUState *state) {
+    if (instance == NULL) return fmi3Error;
+    if (state != NULL) { free(*state); *state = NULL; }
+    return fmi3OK;
+}
+
+fmi3Status fmi3SerializedFMUStateSize(fmi3Instance instance, fmi3FMUState state, size_t *size) {
+    (void)state;
+    if (instance == NULL || size == NULL) return fmi3Error;
+    *size = sizeof(State);
+    return fmi3OK;
+}
+
+fmi3Status fmi3SerializeFMUState(fmi3Instance instance, fmi3FMUState state, fmi3Byte bytes[], size_t size) {
+    if (instance == NULL || state == NULL || size != sizeof(State)) return fmi3Error;
+    memcpy(bytes, state, sizeof(State));
+    return fmi3OK;
+}
+
+fmi3Status fmi3DeserializeFMUState(fmi3Instance instance, const fmi3Byte bytes[], size_t size, fmi3FMUState *state) {
+    if (instance == NULL || state == NULL || size != sizeof(State)) return fmi3Error;
+    if (*state == NULL && (*state = malloc(sizeof(State))) == NULL) return fmi3Error;
+    memcpy(*state, bytes, sizeof(State));
+    return fmi3OK;
+}
+
+/* ------------------------------------------------------------------ Model Exchange */
+
+fmi3Status fmi3EvaluateDiscreteStates(fmi3Instance instance) { return instance == NULL ? fmi3Error : fmi3OK; }
+
+fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean *needed, fmi3Boolean *terminate, fmi3Boolean *nominals,
+                                    fmi3Boolean *values, fmi3Boolean *defined, fmi3Float64 *next) {
+    Instance *inst = instance;
+    if (inst == NULL) return fmi3Error;
+    State *s = &inst->s;
+    compute(s);
+    s->terminated = reached(s, s->time);
+    *needed = *nominals = *values = fmi3False;
+    *terminate = s->terminated ? fmi3True : fmi3False;
+    *defined = fmi3True;
+    *next = fmin((double)(boundaries(s, s->time) + 1) * s->real[VR_PERIOD], s->real[VR_STOP_AT]);
+    return fmi3OK;
+}
+
+fmi3Status fmi3EnterContinuousTimeMode(fmi3Instance instance) { return instance == NULL ? fmi3Error : fmi3OK; }
+
+fmi3Status fmi3CompletedIntegratorStep(fmi3Instance instance, fmi3Boolean noSet, fmi3Boolean *event, fmi3Boolean *stop) {
+    (void)noSet;
+    if (instance == NULL) return fmi3Error;
+    *event = *stop = fmi3False;
+    return fmi3OK;
+}
+
+fmi3Status fmi3SetTime(fmi3Instance instance, fmi3Float64 time) {
+    if (instance == NULL) return fmi3Error;
+    ((Instance *)instance)->s.time = time;
+    return fmi3OK;
+}
+
+fmi3Status fmi3SetContinuousStates(fmi3Instance instance, const fmi3Float64 x[], size_t n) {
+    if (instance == NULL || n != 1) return fmi3Error;
+    ((Instance *)instance)->s.real[VR_LEVEL] = x[0];
+    return fmi3OK;
+}
+
+fmi3Status fmi3GetContinuousStateDerivatives(fmi3Instance instance, fmi3Float64 dx[], size_t n) {
+    if (instance == NULL || n != 1) return fmi3Error;
+    dx[0] = ((Instance *)instance)->s.real[VR_X_IN];
+    return fmi3OK;
+}
+
+fmi3Status fmi3GetEventIndicators(fmi3Instance instance, fmi3Float64 z[], size_t n) {
+    (void)z;
+    return instance == NULL || n != 0 ? fmi3Error : fmi3OK;
+}
+
+fmi3Status fmi3GetContinuousStates(fmi3Instance instance, fmi3Float64 x[], size_t n) {
+    if (instance == NULL || n != 1) return fmi3Error;
+    x[0] = ((Instance *)instance)->s.real[VR_LEVEL];
+    return fmi3OK;
+}
+
+fmi3Status fmi3GetNominalsOfContinuousStates(fmi3Instance instance, fmi3Float64 x[], size_t n) {
+    if (instance == NULL || n != 1) return fmi3Error;
+    x[0] = 1.0;
+    return fmi3OK;
+}
+
+fmi3Status fmi3GetNumberOfEventIndicators(fmi3Instance instance, size_t *n) {
+    if (instance == NULL) return fmi3Error;
+    *n = 0;
+    return fmi3OK;
+}
+
+fmi3Status fmi3GetNumberOfContinuousStates(fmi3Instance instance, size_t *n) {
+    if (instance == NULL) return fmi3Error;
+    *n = 1;
+    return fmi3OK;
+}
+
+/* ------------------------------------------------------------------ Co-Simulation */
+
+fmi3Status fmi3EnterStepMode(fmi3Instance instance) { return instance == NULL ? fmi3Error : fmi3OK; }
+
+fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 t, fmi3Float64 h, fmi3Boolean noSet, fmi3Boolean *event,
+                      fmi3Boolean *terminate, fmi3Boolean *early, fmi3Float64 *last) {
+    Instance *inst = instance;
+    (void)noSet;
+    if (inst == NULL) return fmi3Error;
+    State *s = &inst->s;
+    *event = *early = *terminate = fmi3False;
+    *last = s->time;
+    if (s->terminated) return refuse(inst, "fmi3DoStep", "the simulation was terminated at stop_at");
+    if (!(h >= 0.0) || fabs(t - s->time) > 1e-9 * fmax(1.0, fabs(t)))
+        return refuse(inst, "fmi3DoStep", "the step must start at the FMU's time and have h >= 0");
+    double end = t + h;
+    if (reached(s, end)) {  /* stop at stop_at, as a time event inside the step would */
+        end = fmax(t, s->real[VR_STOP_AT]);
+        s->terminated = 1;
+    }
+    s->real[VR_LEVEL] += s->real[VR_X_IN] * (end - t);
+    s->time = end;
+    compute(s);
+    *terminate = s->terminated ? fmi3True : fmi3False;
+    *last = end;
+    return fmi3OK;
+}
