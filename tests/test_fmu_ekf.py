@@ -9,6 +9,7 @@ from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 from fmu_drivers import initialised, refused_initialisation
 from fmu_signal_drivers import run_ecos, run_fmpy, run_libcosim
+from sampled_reference import SampledRun
 
 from shapefmu.runtime.ekf_tuner import EKFTunedShaperKernel
 
@@ -97,13 +98,14 @@ def test_nan_vibration_fails_that_step_and_the_run_continues_unchanged(ekf_fmu):
     assert rows == run_fmpy(ekf_fmu, inputs, H, OUTPUTS)
 
 
-def test_a_step_that_is_not_a_whole_number_of_samples_is_an_error(ekf_fmu):
-    slave, vr = initialised(ekf_fmu)
-    with pytest.raises(FMICallException) as failure:
-        slave.doStep(0.0, 2.5 * H)
-    assert failure.value.status == 3
-    slave.doStep(0.0, 4 * H)
-    slave.freeInstance()
+def test_steps_of_2_5_samples_run_the_kernel_once_per_sample_and_hold_its_outputs(ekf_fmu):
+    inputs = _signals(1200, seed=4)
+    step = 2.5 * H
+    rows = run_fmpy(ekf_fmu, inputs, step, OUTPUTS)  # outputs after each step, at (k + 1) * step
+    run = SampledRun(step * np.arange(len(inputs) + 1), [[v["u"], v["vibration"]] for v in inputs] + [[0.0, 0.0]], H)
+    expected, _ = _kernel_rows([{"u": u, "vibration": v} for u, v in run.samples])
+    # At sample k's instant the outputs are those after sample k - 1.
+    np.testing.assert_allclose(rows, np.array(expected)[run.index[1:] - 1], rtol=0, atol=1e-12)
 
 
 @pytest.mark.parametrize(

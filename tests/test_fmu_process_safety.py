@@ -14,7 +14,8 @@ Two hazards live in every process that hosts our pythonfmu-based FMUs (fmpy, the
 - pythonfmu 0.7.0 answers a Python exception escaping the slave with fmi2Fatal and releases the
   instance's Python objects then and again at fmi2FreeInstance; and its library destructor writes
   into a std::shared_ptr that the C++ exit handlers have already freed. The FMUs' C front end
-  (``shim/fmi2_shim.c``, point 5) stops forwarding to a fatal instance and resets the pointer first.
+  stops forwarding to a fatal instance (``shim/fmi2_shim.c``, point 5) and resets the pointer
+  first (``shim/python_runtime.c``).
 
 Each scenario runs in a subprocess (this file run as a script), so a crash fails the test instead of
 killing pytest. The reference is a fresh process that instantiates each FMU once, alone.
@@ -296,7 +297,7 @@ def test_an_exception_escaping_a_slave_is_fatal_for_that_instance_only_and_relea
 
 def test_valgrind_sees_no_invalid_access_in_the_fmu_binaries_of_a_python_host(tmp_path):
     """pythonfmu's library destructor resets a std::shared_ptr the C++ exit handlers have freed;
-    the front end's own exit handler resets it first (shim/fmi2_shim.c, point 5)."""
+    the front end's own exit handler resets it first (shim/python_runtime.c)."""
     from fixtures_fmi import EKF_STARTS, SHAPER_STARTS
 
     from shapefmu.fmi import build_fmu

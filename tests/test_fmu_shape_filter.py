@@ -29,6 +29,7 @@ from fmu_drivers import (
     run_libcosim,
 )
 from hosts import run_ecos_program
+from sampled_reference import SampledRun
 
 from shapefmu.runtime import time_frequency as runtime_time_frequency
 from shapefmu.shapers import TWIN_PULSE_PROFILES, WINDOW_FILTERS, SampledShaper, time_frequency_profile
@@ -288,21 +289,24 @@ def test_bad_parameters_fail_initialisation_with_error_and_a_logged_message(shap
     assert "ShapeFilter bad: invalid parameters" in logged and words in logged
 
 
-def test_a_step_that_is_not_a_whole_number_of_samples_is_an_error(shape_filter_fmu):
-    commands = command_signal(60)
+@pytest.mark.parametrize("step", [3 * H, 1.5 * H, 0.4 * H])
+def test_steps_of_any_size_sample_on_the_grid_and_hold_between_samples(shape_filter_fmu, step):
+    commands = command_signal(300)
     slave, vr = initialised(shape_filter_fmu)
-    with pytest.raises(FMICallException) as failure:
-        slave.doStep(0.0, 1.5 * H)
-    assert failure.value.status == 3
     out = []
-    for k in range(0, len(commands), 3):  # three samples per step, u held over each
-        slave.setReal([vr["u"]], [commands[k]])
-        slave.doStep(k * H, 3 * H)
+    for k, u in enumerate(commands):
+        slave.setReal([vr["u"]], [u])
         out.append(slave.getReal([vr["y"]])[0])
+        slave.doStep(k * step, step)
     slave.freeInstance()
-    held = np.repeat(commands[::3], 3)
-    np.testing.assert_allclose(out, _after_each_step(_fixture_design(), held, SHAPE_FILTER_STARTS["u0"])[2::3],
-                               rtol=0, atol=1e-12)
+    run = SampledRun(step * np.arange(len(commands)), commands, H)
+    expected = run.fir(_fixture_design().taps, SHAPE_FILTER_STARTS["u0"])
+    np.testing.assert_allclose(out, expected, rtol=0, atol=1e-12)
+
+
+def test_state_restores_exactly_between_samples(shape_filter_fmu):
+    # Steps of 1.5 ms: after step 101 (151.5 ms) the clock is between samples, its input latched.
+    assert_state_restores_exactly(shape_filter_fmu, command_signal(300), 1.5 * H, at=101)
 
 
 def test_nan_input_fails_that_step_and_leaves_the_state_untouched(shape_filter_fmu):

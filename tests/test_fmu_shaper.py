@@ -157,13 +157,27 @@ def test_bad_parameter_message_reaches_the_host_logger(shaper_fmu, capfd):
     assert "zeta[1] must be in [0, 1), got 1.2" in capfd.readouterr().out
 
 
-def test_a_step_that_is_not_a_whole_number_of_samples_is_an_error(shaper_fmu):
+def test_between_samples_y_holds_and_a_new_u_waits_for_the_next_sample(shaper_fmu):
+    # ZV for 10 Hz at 1 ms: y[k] = (u[k] + u[k - 50]) / 2, the command at u0 = -1 before t = 0.
     slave, vr = initialised(shaper_fmu)
-    with pytest.raises(FMICallException) as failure:
-        slave.doStep(0.0, 1.5 * H)
-    assert failure.value.status == 3
-    slave.doStep(0.0, 3 * H)  # three samples in one step are fine
+
+    def y_after_setting(u):
+        slave.setReal([vr["u"]], [u])
+        return slave.getReal([vr["y"]])[0]
+
+    assert y_after_setting(2.0) == 0.5 * 2.0 - 0.5  # on sample 0: fed through
+    slave.doStep(0.0, 1.5 * H)  # samples 0 and 1 (u = 2 in effect at 1 ms), then between samples
+    assert y_after_setting(7.0) == 0.5 * 2.0 - 0.5  # held: sample 1's output; 7 waits
+    slave.doStep(1.5 * H, 0.5 * H)  # onto sample 2, whose input is the 7 set at 1.5 ms
+    assert slave.getReal([vr["y"]])[0] == 0.5 * 7.0 - 0.5
+    slave.doStep(2 * H, 1e-16)  # a step of 1e-16 s stays on sample 2's instant: still fed through
+    assert y_after_setting(3.0) == 0.5 * 3.0 - 0.5
     slave.freeInstance()
+
+
+def test_state_restores_exactly_between_samples(shaper_fmu):
+    # Steps of 1.5 ms: after step 41 (61.5 ms) the clock is between samples, its input latched.
+    assert_state_restores_exactly(shaper_fmu, command_signal(120), 1.5 * H, at=41)
 
 
 def test_nan_input_fails_that_step_and_leaves_the_state_untouched(shaper_fmu):

@@ -6,9 +6,6 @@ it verbatim and a user of the Python API knows what to change.
 
 import math
 
-# Whole samples per communication step: h / ts within this relative distance of an integer.
-_STEP_RTOL = 1e-9
-
 
 def check_finite(value, name):
     """Return ``value`` as a float, or raise ValueError if it is not a finite real number."""
@@ -57,17 +54,3 @@ def check_count(value, name, minimum=0):
         raise ValueError(f"{name} must be an integer >= {minimum}, got {value!r}")
     return int(value)
 
-
-def whole_samples(h, ts, period, sampled):
-    """The number of samples of period ``ts`` in a communication step ``h``, or ValueError.
-
-    A sampled FMU runs whole samples per step. ``period`` is the name of its sampling-period
-    parameter and ``sampled`` what it samples, for the message.
-    """
-    m = round(h / ts)
-    if m < 1 or abs(m * ts - h) > _STEP_RTOL * h:
-        raise ValueError(
-            f"communication step h = {h!r} s is not a whole number of {sampled} samples {period} = {ts!r} s; "
-            f"use h = k*{period} for an integer k >= 1"
-        )
-    return m

@@ -2,8 +2,9 @@
 
 An FMU holds
 
-- ``binaries/linux64/<Model>.so``: the C front end (``shim/fmi2_shim.c``, compiled here with the
-  system C compiler), which makes libpython global and forwards to
+- ``binaries/linux64/<Model>.so``: the C front end (``shim/fmi2_shim.c`` and
+  ``shim/python_runtime.c``, compiled here with the system C compiler), which makes libpython
+  global, starts the interpreter and forwards to
 - ``binaries/linux64/<Model>_pythonfmu.so``: pythonfmu's export library, which embeds Python;
 - ``resources/<package>/``: the slave, its base and ``runtime/``, under a package name made of the
   shapefmu version and a hash of exactly these sources, so FMUs built from different code never
@@ -12,7 +13,7 @@ An FMU holds
   library imports;
 - ``resources/shapefmu_build.json``: the start values baked in, the GUID and the declared
   dependencies, read by every instance (so two builds of one slave differ only here);
-- ``resources/shim/fmi2_shim.c`` (the front end's source, for the record) and ``modelDescription.xml``.
+- ``resources/shim/`` (the front end's sources, for the record) and ``modelDescription.xml``.
 
 Start values are checked at build time by running the slave's own design (``initialize``), so a
 bad parameter fails the build with the slave's ValueError.
@@ -40,7 +41,12 @@ from shapefmu.fmi.python.slaves import SLAVES
 
 PYTHON_FMI_DIR = Path(__file__).parent
 PACKAGE_DIR = PYTHON_FMI_DIR.parent.parent
-SHIM_SOURCE = PYTHON_FMI_DIR / "shim" / "fmi2_shim.c"
+SHIM_DIR = PYTHON_FMI_DIR / "shim"
+SHIM_SOURCES = (SHIM_DIR / "fmi2_shim.c", SHIM_DIR / "python_runtime.c")
+# The FMI 2.0 standard headers, shared with the native FMUs.
+FMI_HEADERS_DIR = PYTHON_FMI_DIR.parent / "native" / "c"
+SHIM_FILES = (*SHIM_SOURCES, SHIM_DIR / "fmi2_shim.h", FMI_HEADERS_DIR / "fmi2FunctionTypes.h",
+              FMI_HEADERS_DIR / "fmi2TypesPlatform.h")
 BUILD_FILE = "shapefmu_build.json"
 ENTRY_MODULE = '''"""Entry module of the {name} FMU, imported by pythonfmu's export library."""
 
@@ -127,13 +133,18 @@ def _libpython() -> str:
     return str(path) if path.is_file() else ""
 
 
-def compile_shim(out: Path, model_identifier: str, guid: str) -> Path:
-    """Compile the C front end for one FMU with the system C compiler."""
+def compile_shim(out: Path, model_identifier: str, guid: str, libpython: str | None = None, minors=None) -> Path:
+    """Compile the C front end for one FMU with the system C compiler.
+
+    ``libpython`` (default: the build interpreter's) and ``minors`` (default: the build's minor
+    version, then ``FALLBACK_MINORS``) are where the front end looks for Python at run time.
+    """
     compiler = os.environ.get("CC") or shutil.which("cc") or shutil.which("gcc")
     if not compiler:
         raise RuntimeError("a C compiler (cc or gcc, or $CC) is needed to build the FMU's front end")
-    libpython = _libpython()
-    minors = [sys.version_info.minor] + [m for m in FALLBACK_MINORS if m != sys.version_info.minor]
+    libpython = _libpython() if libpython is None else libpython
+    if minors is None:
+        minors = [sys.version_info.minor] + [m for m in FALLBACK_MINORS if m != sys.version_info.minor]
     command = [
         compiler, "-shared", "-fPIC", "-O2", "-fvisibility=hidden", "-Wall",
         f'-DSHIM_GUID="{guid}"',
@@ -141,7 +152,7 @@ def compile_shim(out: Path, model_identifier: str, guid: str) -> Path:
         f'-DSHIM_PYTHONHOME="{sys.base_prefix if libpython else ""}"',
         f'-DSHIM_INNER_NAME="{model_identifier}_pythonfmu.so"',
         f"-DSHIM_FALLBACK_MINORS={','.join(map(str, minors))}",
-        "-o", str(out), str(SHIM_SOURCE), "-ldl",
+        "-I", str(FMI_HEADERS_DIR), "-o", str(out), *map(str, SHIM_SOURCES), "-ldl", "-lpthread",
     ]
     result = subprocess.run(command, capture_output=True, text=True)
     if result.returncode != 0:
@@ -189,7 +200,8 @@ def build_fmu(name: str, out_path, **start_values) -> Path:
             fmu.writestr("modelDescription.xml", xml)
             fmu.write(shim, f"binaries/linux64/{name}.so")
             fmu.write(export_library, f"binaries/linux64/{name}_pythonfmu.so")
-            fmu.write(SHIM_SOURCE, "resources/shim/fmi2_shim.c")  # the record; hosts do not build it
+            for source in SHIM_FILES:  # the record; hosts do not build it
+                fmu.write(source, f"resources/shim/{source.name}")
             fmu.writestr("resources/slavemodule.txt", entry)
             fmu.writestr(f"resources/{entry}.py", ENTRY_MODULE.format(name=name, package=package, module=SLAVES[name]))
             fmu.writestr(f"resources/{BUILD_FILE}", json.dumps(build, indent=2))

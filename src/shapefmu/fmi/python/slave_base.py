@@ -35,8 +35,11 @@ How to add an FMU (one module and one registry line):
 3. ``initialize(self)``: validate the parameters with ``runtime.checks`` (raise ValueError naming
    the parameter, value and valid range) and build the kernels. It runs at the exit of
    initialisation and again after ``fmi2Reset``.
-4. ``step(self, t, h)``: advance the kernels over [t, t + h) and set the outputs. Raise ValueError
-   for a step the FMU cannot honour. Inputs are already checked for NaN.
+4. ``step(self, t, h)``: advance the kernels over (t, t + h] and set the outputs. Raise ValueError
+   for a step the FMU cannot honour. Inputs are already checked for NaN. Any h > 0 must be
+   honoured (hosts trim their last step to 1e-16 s): a sampled FMU takes its samples on the
+   absolute grid with ``runtime.sample_clock.SampleClock`` (made in ``initialize`` with t0 =
+   ``self.time``, listed in ``kernels`` and ``state_attributes``), never by counting Ts in h.
 5. ``output_dependencies(self)``: after ``initialize``, ``{output: [inputs it feeds through from]}``;
    the builder writes it into ModelStructure (and InitialUnknowns).
 6. Add ``"<ModelName>": "<module>"`` to ``SLAVES`` in ``shapefmu/fmi/python/slaves/__init__.py``; then
@@ -75,6 +78,15 @@ OK, WARNING, DISCARD, ERROR, FATAL = range(5)
 ENTRY_MODULE_REFERENCES = []
 
 _TYPES = {"Real": float, "Integer": int, "Boolean": bool, "String": str}
+
+
+def sampled_description(summary, inputs, period="Ts"):
+    """A sampled FMU's modelDescription description: ``summary`` and the semantics of its clock."""
+    return (
+        f"{summary}. Samples {inputs} at startTime + k*{period} whatever the communication steps, each sample "
+        f"taking the value set at the last communication point at or before its instant; between samples the "
+        f"outputs hold the newest sample's, and inputs set there are used from the next sample on"
+    )
 
 
 class LogMessage:

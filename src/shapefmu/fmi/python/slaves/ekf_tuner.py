@@ -5,12 +5,16 @@ converged the command passes through; then a shaper of ``kind`` is designed for 
 (omega_n, zeta) and switched in once the command rests; a converged estimate that moves by more than
 ``retune_fraction`` re-designs it.
 
-Sampled semantics. The kernel runs one sample every ``Ts`` (fs = 1 / Ts); a communication step is a
-whole number of samples (otherwise fmi2Error), during which ``u`` and ``vibration`` are held. After
-``fmi2DoStep(t, h)`` the outputs are the kernel's after the last sample of the step: ``y`` the
-shaped command of that sample, ``omega_est`` and ``zeta_est`` the EKF's estimate of the undamped
-frequency and damping ratio, ``converged`` 1 once the estimate has converged. Outputs change only
-in doStep, so none depends on an input at the same instant (ModelStructure lists none).
+Sampled semantics (``runtime.sample_clock``). The kernel runs one sample at every instant
+t0 + k ``Ts`` (t0 the start time, fs = 1 / Ts) wherever the communication points fall, with the
+values of ``u`` and ``vibration`` in effect at that instant (set at the last communication point at
+or before it, within 1e-6 Ts). Any step h > 0 is accepted; a step over more than 10^7 samples is
+refused (fmi2Error). The outputs are the kernel's after the newest sample committed, held until the
+next one: ``y`` the shaped command of that sample, ``omega_est`` and ``zeta_est`` the EKF's estimate
+of the undamped frequency and damping ratio, ``converged`` 1 once the estimate has converged. So at
+t0 + k Ts the outputs are those of sample k - 1 (one sample of delay, as with steps of Ts from t0).
+Outputs change only in doStep, so none depends on an input at the same instant (ModelStructure
+lists none).
 
 State. fmi2GetFMUstate saves the whole kernel: the EKF's state, covariance, convergence window and
 re-acquisition statistic, the shaper's ring buffer and any pending design.
@@ -18,17 +22,21 @@ re-acquisition statistic, the shaper's ring buffer and any pending design.
 
 import math
 
-from ....runtime.checks import check_count, check_positive, whole_samples
+from ....runtime.checks import check_count, check_positive
 from ....runtime.ekf import ResonanceEKF
 from ....runtime.ekf_tuner import KINDS, EKFTunedShaperKernel
+from ....runtime.sample_clock import SampleClock
 from ....runtime.shaper_filter import StreamingShaper
-from ..slave_base import Fmi2Slave
+from ..slave_base import Fmi2Slave, sampled_description
 
 class EKFTuner(Fmi2Slave):
     model_name = "EKFTuner"
-    description = "EKF-tuned input shaper: estimates the vibration's mode and shapes the command for it (paper 001)"
-    kernels = (EKFTunedShaperKernel, ResonanceEKF, StreamingShaper)
-    state_attributes = ("tuner",)
+    description = sampled_description(
+        "EKF-tuned input shaper: estimates the vibration's mode and shapes the command for it (paper 001)",
+        "u and vibration",
+    )
+    kernels = (EKFTunedShaperKernel, ResonanceEKF, StreamingShaper, SampleClock)
+    state_attributes = ("tuner", "clock")
 
     def declare(self):
         self.parameter("kind", "zvd", f"shaper designed for the estimated mode: {', '.join(KINDS)}")
@@ -44,6 +52,7 @@ class EKFTuner(Fmi2Slave):
         self.output("zeta_est", "estimated damping ratio")
         self.output("converged", "1 once the EKF estimate has converged, else 0")
         self.tuner = None
+        self.clock = None
 
     def initialize(self):
         values = self.values
@@ -59,6 +68,7 @@ class EKFTuner(Fmi2Slave):
             values["retune_fraction"],
             amplitude=values["amplitude"],
         )
+        self.clock = SampleClock(ts, self.time)
         values["y"] = 0.0
         self._estimates()
 
@@ -77,9 +87,10 @@ class EKFTuner(Fmi2Slave):
         return 0.0, ts * math.ceil(200 * 2.0 * math.pi / self.values["omega0"] / ts), ts
 
     def step(self, t, h):
-        m = whole_samples(h, self.values["Ts"], "Ts", "EKF")
-        u, vibration = self.values["u"], self.values["vibration"]
-        for _ in range(m):
-            y = self.tuner.step(u, vibration)
-        self.values["y"] = y
+        values, tuner = self.values, self.tuner
+
+        def commit(sample):
+            values["y"] = tuner.step(*sample)
+
+        self.clock.advance(t, h, (values["u"], values["vibration"]), commit)
         self._estimates()

@@ -23,9 +23,13 @@ the mode ``f`` (Hz), ``zeta`` and the sampling period ``Ts``:
 The twin-pulse and time-frequency designs are for an undamped mode and have no robustness order:
 ``zeta`` must be 0 and ``order`` 1 for them (an error says so rather than ignoring the value).
 
-Sampled semantics, as the Shaper FMU. The command u is sampled every ``Ts_used`` and held,
-y[k] = sum_j f[j] u[k - j] with u resting at ``u0`` before the start: the design layer's
-``SampledShaper(taps, Ts).apply``. A communication step must be a whole number of samples.
+Sampled semantics, as the Shaper FMU (``runtime.sample_clock``). The command u is sampled at
+t0 + k ``Ts_used`` (t0 the start time) wherever the communication points fall, y[k] = sum_j f[j]
+u[k - j] with u resting at ``u0`` before the start: the design layer's ``SampledShaper(taps,
+Ts).apply`` of the sampled command. Sample k takes the value of u in effect at its instant (set at
+the last communication point at or before it, within 1e-6 Ts). Any step h > 0 is accepted; between
+samples y holds y[k], and a u set there is used from the next sample on. A step over more than
+10^7 samples is refused (fmi2Error).
 
 Feed-through. y at a communication point depends on u at that point exactly when f[0] != 0
 (``runtime.shaper_filter.FeedthroughFIR`` keeps f[0] u apart from the committed history): the
@@ -39,9 +43,10 @@ the largest) is taken as the zero it is.
 import math
 
 from ....runtime import time_frequency, twin_pulse, window_filters
-from ....runtime.checks import check_count, check_finite, check_positive, check_zeta, whole_samples
+from ....runtime.checks import check_count, check_finite, check_positive, check_zeta
+from ....runtime.sample_clock import SampleClock
 from ....runtime.shaper_filter import FeedthroughFIR, StreamingShaper
-from ..slave_base import Fmi2Slave
+from ..slave_base import Fmi2Slave, sampled_description
 
 WINDOW_KINDS = tuple(window_filters.WINDOW_FILTERS)
 KINDS = (*WINDOW_KINDS, *twin_pulse.KINDS, "time-frequency")
@@ -106,16 +111,19 @@ def design_taps(values):
 
 class ShapeFilter(Fmi2Slave):
     model_name = "ShapeFilter"
-    description = "Sampled shape filter (window filters of order n, twin-pulse kernels, time-frequency), designed from its parameters"
-    kernels = (FeedthroughFIR, StreamingShaper)
-    state_attributes = ("fir", "taps")
+    description = sampled_description(
+        "Sampled shape filter (window filters of order n, twin-pulse kernels, time-frequency), designed from its "
+        "parameters", "u", "Ts_used"
+    )
+    kernels = (FeedthroughFIR, StreamingShaper, SampleClock)
+    state_attributes = ("fir", "taps", "clock")
 
     def declare(self):
         self.parameter("kind", "hanning", f"filter design: {', '.join(KINDS)}")
         self.parameter("f", 10.0, "natural frequency of the mode (time-frequency: its first resonance)", unit="Hz")
         self.parameter("zeta", 0.0, "damping ratio of the mode, in [0, 1); window filters only (others need 0)")
         self.parameter("order", 1, "robustness order n of a window filter: its n-fold self-convolution (eq. 1)", minimum=1)
-        self.parameter("Ts", 1e-3, "sampling period of the filter; communication steps are multiples of it", unit="s")
+        self.parameter("Ts", 1e-3, "sampling period of the filter: u is sampled at startTime + k*Ts", unit="s")
         self.parameter("adjust_Ts", False, "window filters: use the nearest Ts that makes the window length whole")
         self.parameter("c", 0.25, "weight C of the side Hanning windows of three-hanning (section 7), >= 0")
         self.parameter("base", "hanning", f"base window of differenced and convolved: {', '.join(BASES)}")
@@ -128,6 +136,7 @@ class ShapeFilter(Fmi2Slave):
         self.output("Ts_used", "sampling period in force: Ts, or the adjusted one (adjust_Ts)", unit="s")
         self.fir = None
         self.taps = None
+        self.clock = None
 
     def initialize(self):
         values = self.values
@@ -137,6 +146,7 @@ class ShapeFilter(Fmi2Slave):
             taps = [0.0, *taps[1:]]
         self.taps = tuple(taps)
         self.fir = FeedthroughFIR.from_taps(taps, u0)
+        self.clock = SampleClock(ts, self.time)
         values["Ts_used"] = ts
         values["y"] = self.fir.output(check_finite(values["u"], "u"))
 
@@ -150,11 +160,7 @@ class ShapeFilter(Fmi2Slave):
 
     def input_changed(self, name):
         if self.fir is not None:
-            self.values["y"] = self.fir.output(self.values["u"])
+            self.values["y"] = self.fir.output(self.clock.current(self.values["u"]))
 
     def step(self, t, h):
-        m = whole_samples(h, self.values["Ts_used"], "Ts_used", "filter")
-        fir, u = self.fir, self.values["u"]
-        for _ in range(m):
-            fir.commit(u)
-        self.values["y"] = fir.output(u)
+        self.values["y"] = self.fir.output(self.clock.advance(t, h, self.values["u"], self.fir.commit))

@@ -7,14 +7,17 @@ command before the start time. The design is ``runtime.shaper_designs.design_imp
 kinds given several modes are convolved (paper 002's convolution method); ``simultaneous`` solves
 paper 002's eq. (20) for all modes at once with ``runtime.multimode``. Input ``u``, output ``y``.
 
-Sampled semantics. The command is sampled every ``Ts`` and held in between; impulses off the grid
-are split onto it (``runtime.shaper_filter.grid_impulses``), so y[k] = sum_d w_d u[k - d], exactly
-the design layer's ``ImpulseShaper.on_grid(Ts).apply``. A communication step must be a whole
-number of samples (otherwise fmi2Error).
+Sampled semantics (``runtime.sample_clock``). The command is sampled at t0 + k Ts (t0 the start
+time), wherever the communication points fall; impulses off the grid are split onto it
+(``runtime.shaper_filter.grid_impulses``), so y[k] = sum_d w_d u[k - d], exactly the design layer's
+``ImpulseShaper.on_grid(Ts).apply`` of the sampled command. Sample k takes the value of u in effect
+at t0 + k Ts: the one set at the last communication point at or before it (within 1e-6 Ts). Any
+step h > 0 is accepted, 1e-16 s or 0.8 Ts alike; between samples y holds y[k], and a u set there
+is used from the next sample on. A step over more than 10^7 samples is refused (fmi2Error).
 
 Feed-through. Every impulse shaper has its first impulse at t = 0, so y at a communication point
-depends on u at that same point: y = w_0 u + r, r = sum_{d >= 1} w_d u[k - d]. ModelStructure
-declares the dependency, and setting u updates y at once. ``runtime.shaper_filter.FeedthroughFIR``
+on the sample grid depends on u at that same point: y = w_0 u + r, r = sum_{d >= 1} w_d u[k - d].
+ModelStructure declares the dependency, and setting u there updates y at once. ``runtime.shaper_filter.FeedthroughFIR``
 keeps the history part r apart, a StreamingShaper on the taps d >= 1 shifted by one sample:
 stepping it with u[k] when the step commits u[k] returns r for the next sample, so nothing is ever
 un-done.
@@ -23,9 +26,10 @@ un-done.
 import math
 
 from ....runtime import shaper_designs
-from ....runtime.checks import check_count, check_finite, check_positive, check_vtol, whole_samples
+from ....runtime.checks import check_count, check_finite, check_positive, check_vtol
+from ....runtime.sample_clock import SampleClock
 from ....runtime.shaper_filter import FeedthroughFIR, StreamingShaper, grid_impulses
-from ..slave_base import Fmi2Slave
+from ..slave_base import Fmi2Slave, sampled_description
 
 MAX_MODES = 4
 KINDS = shaper_designs.KINDS
@@ -33,9 +37,11 @@ KINDS = shaper_designs.KINDS
 
 class Shaper(Fmi2Slave):
     model_name = "Shaper"
-    description = "Impulse shaper (ZV family, MZV, UM-ZV, EI family, simultaneous multi-mode), designed from its parameters"
-    kernels = (FeedthroughFIR, StreamingShaper)
-    state_attributes = ("fir", "design")
+    description = sampled_description(
+        "Impulse shaper (ZV family, MZV, UM-ZV, EI family, simultaneous multi-mode), designed from its parameters", "u"
+    )
+    kernels = (FeedthroughFIR, StreamingShaper, SampleClock)
+    state_attributes = ("fir", "design", "clock")
 
     def declare(self):
         self.parameter("kind", "zvd", f"shaper design: {', '.join(KINDS)}")
@@ -45,12 +51,13 @@ class Shaper(Fmi2Slave):
         for i in range(1, MAX_MODES + 1):
             self.parameter(f"f[{i}]", 10.0 * i, f"natural frequency of mode {i}", unit="Hz")
             self.parameter(f"zeta[{i}]", 0.0, f"damping ratio of mode {i}, in [0, 1)")
-        self.parameter("Ts", 1e-3, "sampling period of the filter; communication steps are multiples of it", unit="s")
+        self.parameter("Ts", 1e-3, "sampling period of the filter: u is sampled at startTime + k*Ts", unit="s")
         self.parameter("u0", 0.0, "command before the start time (the filter starts at rest on it)")
         self.input("u", 0.0, "command to shape")
         self.output("y", "shaped command: sum of the impulse amplitudes times the delayed command")
         self.fir = None
         self.design = None
+        self.clock = None
 
     def initialize(self):
         values = self.values
@@ -64,6 +71,7 @@ class Shaper(Fmi2Slave):
         delays, weights = grid_impulses(times, amplitudes, ts)
         self.design = (tuple(times), tuple(amplitudes))
         self.fir = FeedthroughFIR(delays, weights, u0)
+        self.clock = SampleClock(ts, self.time)
         values["y"] = self.fir.output(check_finite(values["u"], "u"))
 
     def output_dependencies(self):
@@ -76,11 +84,7 @@ class Shaper(Fmi2Slave):
 
     def input_changed(self, name):
         if self.fir is not None:
-            self.values["y"] = self.fir.output(self.values["u"])
+            self.values["y"] = self.fir.output(self.clock.current(self.values["u"]))
 
     def step(self, t, h):
-        m = whole_samples(h, self.values["Ts"], "Ts", "filter")
-        fir, u = self.fir, self.values["u"]
-        for _ in range(m):
-            fir.commit(u)
-        self.values["y"] = fir.output(u)
+        self.values["y"] = self.fir.output(self.clock.advance(t, h, self.values["u"], self.fir.commit))

@@ -7,21 +7,26 @@ the switching curves (eqs. 7-16). With ``settle`` true, the linear settle law wi
 ``kd``, ``ki`` takes over inside the region ``x_enter``, ``v_enter`` (left beyond ``x_exit``,
 ``v_exit``), its integrator sampled at ``Ts``.
 
-Sampled semantics and feed-through. The law is evaluated once per sample ``Ts``; a communication
-step is a whole number of samples, with the inputs held. The output ``u`` at a communication point
-is the law evaluated at the inputs set there (``target``, ``x_r``, ``x_r_dot``), so it feeds
-through from all three (ModelStructure says so): setting an input recomputes ``u`` from the
-committed state without changing it, and ``fmi2DoStep`` commits the samples. The sequence of ``u``
-read after setting the inputs is exactly the sequence ``STOSKernel.control`` returns when called
-once per sample with those inputs.
+Sampled semantics and feed-through (``runtime.sample_clock``). The law is evaluated once per
+sample instant t0 + k ``Ts`` (t0 the start time) wherever the communication points fall, with the
+inputs in effect at that instant (set at the last communication point at or before it, within
+1e-6 Ts). Any step h > 0 is accepted; a step over more than 10^7 samples is refused (fmi2Error).
+At a communication point on the sample grid the output ``u`` is the law evaluated at the inputs
+set there (``target``, ``x_r``, ``x_r_dot``), so it feeds through from all three (ModelStructure
+says so): setting an input recomputes ``u`` from the committed state without changing it, and
+``fmi2DoStep`` commits the samples. Between samples ``u`` holds the value of the current sample,
+and inputs set there are used from the next sample on. With one step per sample, the sequence of
+``u`` read after setting the inputs is exactly the sequence ``STOSKernel.control`` returns when
+called once per sample with those inputs.
 """
 
 import math
 
 from ....runtime import shaper_designs
-from ....runtime.checks import check_count, check_finite, check_positive, whole_samples
+from ....runtime.checks import check_count, check_finite, check_positive
+from ....runtime.sample_clock import SampleClock
 from ....runtime.stos import STOSKernel, stos_curves
-from ..slave_base import Fmi2Slave
+from ..slave_base import Fmi2Slave, sampled_description
 
 MAX_MODES = 4
 SETTLE_GAINS = ("kp", "kd", "ki", "x_enter", "v_enter", "x_exit", "v_exit")
@@ -29,9 +34,12 @@ SETTLE_GAINS = ("kp", "kd", "ki", "x_enter", "v_enter", "x_exit", "v_exit")
 
 class STOSController(Fmi2Slave):
     model_name = "STOSController"
-    description = "Shaped time-optimal servomechanism (STOS, paper 002): bang-bang closed loop that spares the modes"
-    kernels = (STOSKernel,)
-    state_attributes = ("kernel",)
+    description = sampled_description(
+        "Shaped time-optimal servomechanism (STOS, paper 002): bang-bang closed loop that spares the modes",
+        "target, x_r and x_r_dot",
+    )
+    kernels = (STOSKernel, SampleClock)
+    state_attributes = ("kernel", "clock")
 
     def declare(self):
         self.parameter("b", 2.7e3, "rigid-body input gain: x_r'' = -damping x_r' + b u", unit="m/s2")
@@ -57,6 +65,7 @@ class STOSController(Fmi2Slave):
         self.input("x_r_dot", 0.0, "measured rigid-body velocity", unit="m/s")
         self.output("u", "control input, |u| <= U")
         self.kernel = None
+        self.clock = None
 
     def initialize(self):
         values = self.values
@@ -70,12 +79,17 @@ class STOSController(Fmi2Slave):
             settle = {name: check_finite(values[name], name) for name in SETTLE_GAINS}
             settle["Ts"] = ts
         self.kernel = STOSKernel(curves, settle)
-        self._preview()
+        self.clock = SampleClock(ts, self.time)
+        self._preview(self._inputs())
 
-    def _preview(self):
-        """u for the current inputs from the committed state, which it leaves as it was."""
+    def _inputs(self):
+        values = self.values
+        return values["target"], values["x_r"], values["x_r_dot"]
+
+    def _preview(self, inputs):
+        """u for ``inputs`` from the committed state, which it leaves as it was."""
         saved = self.kernel.get_state()
-        self.values["u"] = self.kernel.control(self.values["target"], self.values["x_r"], self.values["x_r_dot"])
+        self.values["u"] = self.kernel.control(*inputs)
         self.kernel.set_state(saved)
 
     def output_dependencies(self):
@@ -88,11 +102,8 @@ class STOSController(Fmi2Slave):
 
     def input_changed(self, name):
         if self.kernel is not None and all(math.isfinite(self.values[n]) for n in ("target", "x_r", "x_r_dot")):
-            self._preview()
+            self._preview(self.clock.current(self._inputs()))
 
     def step(self, t, h):
-        m = whole_samples(h, self.values["Ts"], "Ts", "controller")
-        values = self.values
-        for _ in range(m):
-            self.kernel.control(values["target"], values["x_r"], values["x_r_dot"])
-        self._preview()
+        kernel = self.kernel
+        self._preview(self.clock.advance(t, h, self._inputs(), lambda inputs: kernel.control(*inputs)))
