@@ -4,7 +4,7 @@ Single-mode designs share one signature, ``design(omega, zeta, ...)`` with omega
 multi-mode designs take a sequence of ``(omega, zeta)`` modes.
 """
 
-from shapefmu.shapers.catalog import KINDS, design
+from shapefmu.shapers.catalog import KINDS, check_sampling, design
 from shapefmu.shapers.ei import ei, ei2, ei3
 from shapefmu.shapers.impulse import ImpulseShaper, mzv, um_zv, zv, zv_dn, zvd, zvdd
 from shapefmu.shapers.multimode import check_modes, convolve_modes, simultaneous
@@ -56,6 +56,7 @@ __all__ = [
     "bc_vr",
     "blackman_filter",
     "check_modes",
+    "check_sampling",
     "convolve_modes",
     "convolved_filter",
     "design",
