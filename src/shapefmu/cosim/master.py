@@ -55,6 +55,8 @@ from shapefmu.cosim.errors import AlgebraicLoopError, CosimError, CosimInterrupt
 from shapefmu.cosim.graph import Stage, _feeds_through, output_dependencies, schedule
 from shapefmu.cosim.units import FMUFailure, load_units
 from shapefmu.fmi.ssp import System, read_ssp
+from shapefmu.fmi.values import fmi_value
+from shapefmu.runtime.checks import check_size
 
 ALGORITHMS = ("gauss-seidel", "jacobi")
 LOOP_SOLVERS = ("newton", "fixed-point")
@@ -139,6 +141,9 @@ class Master:
     def _interval(self, output_interval):
         if output_interval is None:
             return 1
+        if not (isinstance(output_interval, (int, float)) and math.isfinite(output_interval) and output_interval > 0):
+            raise ValueError(f"output_interval must be a finite whole multiple > 0 of step {self.step!r} s, "
+                             f"got {output_interval!r}")
         ratio = output_interval / self.step
         every = round(ratio)
         if every < 1 or abs(every - ratio) > 1e-9 * ratio:
@@ -275,6 +280,7 @@ class Master:
         n_steps = max(1, math.ceil(span - 1e-9))
         last = n_steps - 1
         rows = 1 + n_steps // self.output_interval + (1 if n_steps % self.output_interval else 0)
+        _check_result_size(rows, len(self.record), stop_time - t0, self.step * self.output_interval)
         buf = np.empty(rows, dtype=[("time", "f8")] + [(name, "f8") for name in self.record])
         self._buf, self._row = buf, 0
         t = t0
@@ -312,8 +318,8 @@ class Master:
             component, variable = _split(reference, "parameter name")
             if component not in self._unit:
                 raise ValueError(f"parameter {reference!r} names unknown component {component!r}")
-            self._unit[component].variable(variable)
-            grouped[component][variable] = value
+            kind = self._unit[component].variable(variable).type
+            grouped[component][variable] = fmi_value(kind, value, f"parameter {reference}")
         return grouped
 
     def _error(self, failure: FMUFailure, t, partial) -> CosimError:
@@ -476,6 +482,13 @@ def simulate(system_or_path, stop_time: float, step: float, *, parameters: dict 
     """Run ``system_or_path`` once with :class:`Master` and return the recorded results."""
     with Master(system_or_path, step, **kwargs) as master:
         return master.run(stop_time, parameters=parameters)
+
+
+def _check_result_size(rows: int, variables: int, span: float, interval: float) -> None:
+    """Refuse, before the first step, a run whose recorded results would not fit in memory."""
+    check_size(rows * (1 + variables) * 8, "MAX_RESULT_BYTES",
+               f"recording {variables} variable(s) every {interval!r} s over {span!r} s ({rows:.4g} rows) needs",
+               "bytes", "record fewer variables (--record) or less often (--output-interval)")
 
 
 def save_results(results: np.ndarray, path) -> Path:
