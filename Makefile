@@ -22,7 +22,7 @@ demo: $(STAMP)
 	$(PY) -m shapefmu compare models/disk_drive.toml --distance 0.05 --plot results/compare_disk_drive.png
 	@echo "demo outputs: FMUs in fmus/, plots in results/ (compare_disk_drive*.png)"
 
-# Debian packages the tests need (oneTBB for ecospy, gcc, valgrind), installed when missing.
+# Debian packages the tests need (gcc, valgrind), installed when missing; oneTBB for ecospy is a wheel.
 system-packages:
 	@bash .ci/system-packages
 

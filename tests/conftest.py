@@ -4,6 +4,11 @@ FMU fixtures are session-scoped (each FMU is built once per test run) and live i
 per family, so the families do not share a file.
 """
 
+from hosts import preload_tbb
+
+# ecospy needs oneTBB; the `tbb` wheel of the test extra provides it without a Debian package.
+preload_tbb()
+
 pytest_plugins = [
     "fixtures_fmi",     # pythonfmu FMUs: shapers, filters, profiles, EKF tuner, STOS, reference player
     "fixtures_plants",  # native C plant FMUs generated from models/

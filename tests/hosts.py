@@ -140,11 +140,53 @@ def run_ecos(fmu, *, step: float, stop_time: float, start_values=None, inputs=No
 HOSTS = {"fmpy": run_fmpy, "libcosim": run_libcosim, "ecos": run_ecos}
 
 
+def tbb_library() -> Path | None:
+    """libtbb.so.12 of the ``tbb`` wheel (the test extra), or None if it is not installed.
+
+    ecospy's native code links oneTBB. The wheel puts it in ``<prefix>/lib``, where the dynamic
+    linker does not look, so the tests need no Debian package (libtbb12) when they load it
+    themselves: ``preload_tbb`` for ecospy in this process, ``LD_LIBRARY_PATH`` for the ecos program.
+    """
+    from importlib import metadata
+
+    try:
+        files = metadata.files("tbb") or []
+    except metadata.PackageNotFoundError:
+        return None
+    found = [Path(f.locate()).resolve() for f in files if f.name == "libtbb.so.12"]
+    return found[0] if found and found[0].is_file() else None
+
+
+def preload_tbb() -> None:
+    """Load the wheel's libtbb.so.12 globally before ecospy is imported: the dynamic linker then
+    resolves ecospy's libtbb.so.12 to this loaded copy (by its soname) instead of searching for it."""
+    import ctypes
+
+    library = tbb_library()
+    if library is not None:
+        ctypes.CDLL(str(library), mode=ctypes.RTLD_GLOBAL)
+
+
+def _tbb_only_folder(workdir) -> dict:
+    """``{"LD_LIBRARY_PATH": folder}`` holding nothing but a link to the wheel's libtbb.so.12 (so
+    the ecos program finds oneTBB and nothing else, libpython least of all), or {} without the wheel."""
+    library = tbb_library()
+    if library is None:
+        return {}
+    folder = Path(workdir) / "tbb_only"
+    folder.mkdir(exist_ok=True)
+    link = folder / "libtbb.so.12"
+    if not link.exists():
+        link.symlink_to(library)
+    return {"LD_LIBRARY_PATH": str(folder)}
+
+
 def run_ecos_program(fmu, *, step: float, stop_time: float, workdir) -> dict:
     """The ecos command-line program shipped in the ecospy wheel, run on one FMU.
 
-    The environment is emptied, so nothing (LD_PRELOAD, LD_LIBRARY_PATH, PYTHONHOME, the venv)
-    helps the FMU find libpython but its own front end. Returns the CSV ecos writes as
+    The environment is emptied, so nothing (LD_PRELOAD, PYTHONHOME, the venv) helps the FMU find
+    libpython but its own front end; LD_LIBRARY_PATH names only a folder holding oneTBB, which the
+    program itself needs (``tbb_library``). Returns the CSV ecos writes as
     ``{column header: values}`` for its real columns (headers such as ``instance::y[REAL]``; ecos
     writes 6 decimals).
     """
@@ -157,7 +199,8 @@ def run_ecos_program(fmu, *, step: float, stop_time: float, workdir) -> dict:
     result = subprocess.run(
         [str(program), "simulate", "--path", str(fmu), "--stepSize", repr(step), "--stopTime", repr(stop_time),
          "--noParallel"],
-        cwd=workdir, env={"PATH": "/usr/bin:/bin", "HOME": str(workdir)}, capture_output=True, text=True, timeout=120,
+        cwd=workdir, env={"PATH": "/usr/bin:/bin", "HOME": str(workdir), **_tbb_only_folder(workdir)},
+        capture_output=True, text=True, timeout=120,
     )
     if result.returncode != 0:
         raise RuntimeError(f"ecos failed on {fmu} (exit {result.returncode}):\n{result.stdout}{result.stderr}")

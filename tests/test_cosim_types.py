@@ -77,7 +77,7 @@ def test_run_parameters_are_typed_by_the_model_description(stair):
 
 
 @pytest.mark.parametrize("parameters, message", [
-    ({"a.increment": "2.5"}, r"parameter a.increment must be an integer \(Integer\), got '2.5'"),
+    ({"a.increment": "2.5"}, r"parameter a.increment must be an integer in \[-2147483648, 2147483647\] \(Integer\), got '2.5'"),
     ({"a.mode": "sideways"}, r"parameter a.mode must be one of up, down or its number \(Enumeration\), got 'sideways'"),
     ({"a.negate": "maybe"}, r"parameter a.negate must be true, false, 1 or 0 \(Boolean\), got 'maybe'"),
     ({"a.period": "fast"}, r"parameter a.period must be a number \(Real\), got 'fast'"),

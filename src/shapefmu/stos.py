@@ -32,7 +32,7 @@ import numpy as np
 from scipy.linalg import expm
 
 from shapefmu.plants import Plant, as_plant
-from shapefmu.runtime.checks import check_finite, check_positive
+from shapefmu.runtime.checks import check_finite, check_positive, check_size
 from shapefmu.runtime.stos import STOSKernel, stos_curves
 from shapefmu.shapers import ImpulseShaper, convolve_modes, design
 
@@ -272,6 +272,13 @@ def _zoh(plant: Plant, Ts: float) -> tuple[np.ndarray, np.ndarray]:
     return E[:n, :n], E[:n, n]
 
 
+def _check_run_size(plant, Ts: float, t_end: float) -> None:
+    """Refuse a run whose arrays (steps + 1 rows of the states, u, w, the target and the time) would
+    not fit in memory, before any of it is computed."""
+    check_size((t_end / Ts + 1) * (plant.n_states + 4) * 8, "MAX_RESULT_BYTES",
+               f"simulating {t_end!r} s at Ts = {Ts!r} s needs", "bytes", "use a shorter t_end or a longer Ts")
+
+
 def simulate_stos(plant, law: STOSLaw, X: float, Ts: float, t_end: float,
                   disturbance: Callable[[float], float] | None = None,
                   setpoint_changes: Sequence[tuple[float, float]] = (), tolerance: float = 1e-3) -> STOSResult:
@@ -292,6 +299,7 @@ def simulate_stos(plant, law: STOSLaw, X: float, Ts: float, t_end: float,
     t_end = check_positive(t_end, "t_end")
     tolerance = check_positive(tolerance, "tolerance")
     changes = sorted((check_finite(t, "setpoint change time"), check_finite(x, "setpoint")) for t, x in setpoint_changes)
+    _check_run_size(plant, Ts, t_end)
     steps = int(math.ceil(t_end / Ts - 1e-9))
     Ad, Bd = _zoh(plant, Ts)
     kernel = law.kernel()
@@ -382,6 +390,8 @@ def stos_report(path, distance: float, shaper: str = "simultaneous", Ts: float =
     """The text of ``shapefmu stos FILE --distance X --shaper KIND [--ts TS] [--plot out.png]``."""
     plant = as_plant(path)
     Ts = check_positive(Ts, "Ts")
+    if t_end is not None:
+        _check_run_size(plant, Ts, check_positive(t_end, "t_end"))
     law = stos_law(plant, shaper, Ts, u_max)
     distance = check_finite(distance, "distance")
     if distance == 0.0:

@@ -7,6 +7,8 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
+from pathlib import Path
 
 from shapefmu.shapers import KINDS
 
@@ -42,3 +44,52 @@ def add_sampling_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--order", type=int, default=1, help="robustness order of window filters (default 1)")
     parser.add_argument("--ts", type=float, help="sampling period in s (window default: pi/(100 omega_d))")
     parser.add_argument("--adjust-ts", action="store_true", help="use the nearest ts that makes M an integer")
+
+
+def output_file(*suffixes: str, what: str = "file"):
+    """An argparse ``type`` for a file the command will write: checked when the command line is
+    read, so that a run is never thrown away at the end for a path it cannot write.
+
+    The name must end in one of ``suffixes`` (any when none is given; ``"plot"`` takes what
+    matplotlib can save), must not be a folder, and the nearest folder on its path that exists
+    must be writable (missing folders are created when the file is written).
+    """
+
+    def check(text: str) -> str:
+        path = Path(text)
+        plot = suffixes == ("plot",)
+        allowed = _plot_suffixes() if plot else suffixes
+        if allowed and path.suffix.lower() not in allowed:
+            raise argparse.ArgumentTypeError(
+                f"{text!r}: the {'plot' if plot else what} name must end in {', '.join(sorted(allowed))}")
+        _check_writable(path, text)
+        return text
+
+    return check
+
+
+def output_folder(text: str) -> str:
+    """An argparse ``type`` for a folder the command writes into: not a file, and writable."""
+    path = Path(text)
+    if path.exists() and not path.is_dir():
+        raise argparse.ArgumentTypeError(f"{text!r} is a file; give a folder")
+    _check_writable(path / "_", text)
+    return text
+
+
+def _check_writable(path: Path, text: str) -> None:
+    if path.is_dir():
+        raise argparse.ArgumentTypeError(f"{text!r} is a folder; give a file name")
+    folder = path.parent
+    while not folder.exists() and folder != folder.parent:
+        folder = folder.parent
+    if not folder.is_dir():
+        raise argparse.ArgumentTypeError(f"{text!r}: {str(folder)!r} on its path is a file, not a folder")
+    if not os.access(folder, os.W_OK | os.X_OK) or (path.exists() and not os.access(path, os.W_OK)):
+        raise argparse.ArgumentTypeError(f"{text!r}: no permission to write there")
+
+
+def _plot_suffixes() -> set[str]:
+    from matplotlib.backend_bases import FigureCanvasBase
+
+    return {f".{kind}" for kind in FigureCanvasBase.get_supported_filetypes()}

@@ -14,13 +14,14 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from shapefmu.cli.arguments import parse_mode
+from shapefmu.cli.arguments import output_file, output_folder, parse_mode
 from shapefmu.fmi.python.builder import build_all, build_fmu
 from shapefmu.fmi.python.slaves.shaper import KINDS, MAX_MODES
+from shapefmu.shapers.catalog import check_sampling
 
 
 def _add_all(parser):
-    parser.add_argument("-o", "--out", default="fmus", help="output directory (default fmus/)")
+    parser.add_argument("-o", "--out", default="fmus", type=output_folder, help="output directory (default fmus/)")
     parser.add_argument("--models", default="models", help="plant models to build as native FMUs (default models/)")
 
 
@@ -37,7 +38,10 @@ def _add_shaper(parser):
     parser.add_argument("--n", type=int, default=1, help="derivative order of zv_dn (default 1)")
     parser.add_argument("--vtol", type=float, default=0.05, help="tolerable vibration (default 0.05)")
     parser.add_argument("--ts", type=float, help="filter sampling period in s (default: 1/100 of the highest mode's period)")
-    parser.add_argument("-o", "--out", default="fmus/Shaper.fmu", help="FMU file (default fmus/Shaper.fmu)")
+    parser.add_argument("--allow-aliasing", action="store_true",
+                        help="build even when a mode is at or above the Nyquist frequency of --ts (it is left ringing)")
+    parser.add_argument("-o", "--out", default="fmus/Shaper.fmu", type=output_file(".fmu", what="FMU"),
+                        help="FMU file (default fmus/Shaper.fmu)")
 
 
 def _build_shaper(args):
@@ -48,6 +52,7 @@ def _build_shaper(args):
         starts[f"f[{i}]"] = omega / (2.0 * math.pi)
         starts[f"zeta[{i}]"] = zeta
     starts["Ts"] = args.ts if args.ts is not None else 2.0 * math.pi / max(w for w, _ in args.mode) / 100.0
+    check_sampling(args.mode, starts["Ts"], allow_aliasing=args.allow_aliasing)
     return [build_fmu("Shaper", Path(args.out), **starts)]
 
 
@@ -55,7 +60,8 @@ def _add_reference(parser):
     parser.add_argument("table", help="signal table: a TimeOptimalSolution .json (shapefmu optimal) or a time,value .csv")
     parser.add_argument("--interpolation", choices=("hold", "linear"), default="hold",
                         help="how a .csv table is read between rows (default hold, as TimeOptimalSolution.to_csv)")
-    parser.add_argument("-o", "--out", default="fmus/ReferencePlayer.fmu", help="FMU file (default fmus/ReferencePlayer.fmu)")
+    parser.add_argument("-o", "--out", default="fmus/ReferencePlayer.fmu", type=output_file(".fmu", what="FMU"),
+                        help="FMU file (default fmus/ReferencePlayer.fmu)")
 
 
 def _build_reference(args):
@@ -88,7 +94,8 @@ def _add_shape_filter(parser):
     parser.add_argument("--delta-f", type=float, help="null mis-alignment of the M- twin-pulse kinds, Hz")
     parser.add_argument("--null", type=int, help="TP:BC twin-pulse null index k (default 2)")
     parser.add_argument("--move-time", type=float, help="time-frequency move time, a whole number of Ts (default 0.1 s)")
-    parser.add_argument("-o", "--out", default="fmus/ShapeFilter.fmu", help="FMU file (default fmus/ShapeFilter.fmu)")
+    parser.add_argument("-o", "--out", default="fmus/ShapeFilter.fmu", type=output_file(".fmu", what="FMU"),
+                        help="FMU file (default fmus/ShapeFilter.fmu)")
 
 
 def _build_shape_filter(args):

@@ -9,7 +9,7 @@ import math
 import numpy as np
 
 from shapefmu.analysis import insensitivity, residual_vibration, sensitivity
-from shapefmu.cli.arguments import add_design_arguments, add_sampling_arguments, parse_mode
+from shapefmu.cli.arguments import add_design_arguments, add_sampling_arguments, output_file, parse_mode
 from shapefmu.shapers import (
     KINDS,
     TWIN_PULSE_PROFILES,
@@ -122,7 +122,7 @@ def register(commands) -> None:
     p = commands.add_parser("sensitivity", help="residual vibration against frequency error")
     add_design_arguments(p)
     p.add_argument("--q-max", type=float, default=2.0, help="largest frequency ratio plotted (default 2)")
-    p.add_argument("--plot", metavar="PNG", help="save the sensitivity curve to this file")
+    p.add_argument("--plot", metavar="PNG", type=output_file("plot"), help="save the sensitivity curve to this file")
     p.set_defaults(run=_cmd_sensitivity)
 
     p = commands.add_parser("profile", help="rest-to-rest motion profile (twin-pulse, time-frequency, window)")
@@ -134,6 +134,7 @@ def register(commands) -> None:
     p.add_argument("--attenuation", type=float, help="spectrum magnitude at the mode, to find delta-omega by bisection")
     p.add_argument("--move-time", type=float, help="move time in s (time-frequency profile)")
     add_sampling_arguments(p)
-    p.add_argument("--plot", metavar="PNG", help="save acceleration, velocity and position to this file")
+    p.add_argument("--plot", metavar="PNG", type=output_file("plot"),
+                   help="save acceleration, velocity and position to this file")
     p.add_argument("--json", action="store_true", help="print the sampled profile as JSON")
     p.set_defaults(run=_cmd_profile)

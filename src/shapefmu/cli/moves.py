@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+from shapefmu.cli.arguments import output_file
+
 
 def _cmd_optimal(args) -> int:
     from shapefmu.optimal import optimal_report
@@ -25,9 +27,12 @@ def register(commands) -> None:
     p.add_argument("file", help="plant model file, e.g. models/disk_drive.toml")
     p.add_argument("--distance", type=float, required=True, help="move distance of the plant's first output")
     p.add_argument("--u-max", type=float, default=None, help="input limit (default: the input's limit in the file)")
-    p.add_argument("--plot", metavar="PNG", help="save u(t) of every move and the outputs of the optimal move")
-    p.add_argument("--json", metavar="FILE", help="save the time-optimal solution as JSON (for `shapefmu build reference`)")
-    p.add_argument("--csv", metavar="FILE", help="save the time-optimal u(t) as a time,value signal table")
+    p.add_argument("--plot", metavar="PNG", type=output_file("plot"),
+                   help="save u(t) of every move and the outputs of the optimal move")
+    p.add_argument("--json", metavar="FILE", type=output_file(".json", what="solution file"),
+                   help="save the time-optimal solution as JSON (for `shapefmu build reference`)")
+    p.add_argument("--csv", metavar="FILE", type=output_file(".csv", what="signal table"),
+                   help="save the time-optimal u(t) as a time,value signal table")
     p.set_defaults(run=_cmd_optimal)
 
     p = commands.add_parser("stos", help="shaped time-optimal closed-loop move (STOS, paper 002), sampled")
@@ -38,5 +43,6 @@ def register(commands) -> None:
     p.add_argument("--ts", type=float, default=1e-6, help="sampling period of the controller in s (default 1e-6)")
     p.add_argument("--t-end", type=float, help="simulated time in s (default: twice the rigid move + 2 ms)")
     p.add_argument("--u-max", type=float, default=None, help="input limit (default: the input's limit in the file)")
-    p.add_argument("--plot", metavar="PNG", help="save u, x_r, x_r', x_f, x_f' against time (like Fig. 6)")
+    p.add_argument("--plot", metavar="PNG", type=output_file("plot"),
+                   help="save u, x_r, x_r', x_f, x_f' against time (like Fig. 6)")
     p.set_defaults(run=_cmd_stos)

@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+from shapefmu.cli.arguments import output_file
+
 
 def _cmd_plant_show(args) -> int:
     from shapefmu.plants import describe
@@ -29,6 +31,7 @@ def register(commands) -> None:
     q.set_defaults(run=_cmd_plant_show)
     q = plant_commands.add_parser("build", help="generate and compile a native ME + CS plant FMU (FMI 2.0 or 3.0)")
     q.add_argument("file", help="plant model: models/*.toml, or a .py file defining plant() (models/pendulum.py)")
-    q.add_argument("-o", "--output", required=True, metavar="FMU", help="FMU to write, e.g. fmus/DiskDrive.fmu")
+    q.add_argument("-o", "--output", required=True, metavar="FMU", type=output_file(".fmu", what="FMU"),
+                   help="FMU to write, e.g. fmus/DiskDrive.fmu")
     q.add_argument("--fmi-version", choices=("2.0", "3.0"), default="2.0", help="FMI version of the FMU (default 2.0)")
     q.set_defaults(run=_cmd_plant_build)

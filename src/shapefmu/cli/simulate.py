@@ -3,9 +3,14 @@
 
 from __future__ import annotations
 
+import contextlib
+import signal
 import sys
+from pathlib import Path
 
 import numpy as np
+
+from shapefmu.cli.arguments import output_file, output_folder
 
 
 def _cmd_simulate(args) -> int:
@@ -17,16 +22,26 @@ def _cmd_simulate(args) -> int:
         if not equals:
             raise ValueError(f"--set must be component.variable=VALUE, got {item!r}")
         parameters[name] = value  # typed by the model description: a number, true/false, an item, text
-    with Master(args.system, args.step, algorithm=args.algorithm, record=args.record, output_interval=args.output_interval,
-                model_exchange=args.model_exchange, progress=args.progress) as master:
+    master = None
+    with _interrupts() as received:
         try:
-            results, status = master.run(args.stop, parameters=parameters), 0
-        except (CosimError, CosimInterrupted) as error:
-            print(f"shapefmu simulate: {error}", file=sys.stderr)
-            results, status = error.partial, (130 if isinstance(error, CosimInterrupted) else 1)
-    if master.termination is not None:
+            with Master(args.system, args.step, algorithm=args.algorithm, record=args.record,
+                        output_interval=args.output_interval, model_exchange=args.model_exchange,
+                        progress=args.progress) as master:
+                try:
+                    results, status = master.run(args.stop, parameters=parameters), 0
+                except (CosimError, CosimInterrupted) as error:
+                    results, status = error.partial, 1
+                    print(f"shapefmu simulate: {_failure(error, received)}", file=sys.stderr)
+                _print_fmu_warnings(master)
+        except KeyboardInterrupt:  # before the run started: nothing recorded
+            print("shapefmu simulate: interrupted before the run started", file=sys.stderr)
+            results, status = None, 130
+    if received:
+        status = 128 + received[0]  # 130 for Ctrl-C, 143 for SIGTERM, as a shell reports them
+    elif master is not None and master.termination is not None:
         print(f"shapefmu simulate: {master.termination}: a normal end", file=sys.stderr)
-    if results is None:
+    if results is None or not len(results):  # failed or stopped before the first record
         return status
     last = results[-1]
     print(f"{len(results)} records to t = {last['time']:.9g} s")
@@ -36,6 +51,7 @@ def _cmd_simulate(args) -> int:
         else:
             print(f"  {name:30s} final {last[name]!s}")
     if args.out:
+        Path(args.out).parent.mkdir(parents=True, exist_ok=True)
         print(f"results written to {save_results(results, args.out)}")
     if args.plot and not any(results.dtype[name].kind in "fiub" for name in results.dtype.names[1:]):
         print("no numeric variable recorded: no plot written")
@@ -52,9 +68,52 @@ def _cmd_simulate(args) -> int:
             axis.set_ylabel(name)
         axes[-1, 0].set_xlabel("time [s]")
         figure.tight_layout()
+        Path(args.plot).parent.mkdir(parents=True, exist_ok=True)
         figure.savefig(args.plot)
         print(f"plot written to {args.plot}")
     return status
+
+
+@contextlib.contextmanager
+def _interrupts():
+    """Ctrl-C and SIGTERM (``kill``, ``timeout``, a batch system ending a job) stop a run alike, so
+    the results recorded so far are saved; yields the list of signals received."""
+    received = []
+
+    def interrupt(signum, frame):
+        received.append(signum)
+        raise KeyboardInterrupt
+
+    try:
+        previous = {number: signal.signal(number, interrupt) for number in (signal.SIGINT, signal.SIGTERM)}
+    except ValueError:  # not the main thread (shapefmu.cli.main called from a worker): leave them alone
+        yield received
+        return
+    try:
+        yield received
+    finally:
+        for number, handler in previous.items():
+            signal.signal(number, handler)
+
+
+def _failure(error, received) -> str:
+    """The line that reports a run that stopped: interrupted, or failed (naming the FMU and call).
+
+    A signal that lands while a Python FMU runs its own code surfaces as that FMU's error (the
+    exception is raised inside it): it is reported as the interruption it was."""
+    if received:
+        when = f" at t = {error.time:.9g} s" if error.time is not None else ""
+        return f"co-simulation interrupted{when} ({signal.Signals(received[0]).name})"
+    return "error: " + " | ".join(str(error).splitlines())
+
+
+def _print_fmu_warnings(master) -> None:
+    """What the FMUs logged as warnings (e.g. a mode above a shaper's Nyquist frequency), on stderr."""
+    for unit in master.units:
+        for message in unit.messages:
+            if message.startswith("[fmi2Warning]"):
+                print(f"shapefmu simulate: warning: component {unit.name!r}: {message[len('[fmi2Warning] '):]}",
+                      file=sys.stderr)
 
 
 def _cmd_compare(args) -> int:
@@ -79,8 +138,9 @@ def register(commands) -> None:
     p.add_argument("--model-exchange", action="append", metavar="COMP", help="integrate this component as Model Exchange")
     p.add_argument("--set", action="append", default=[], metavar="COMP.VAR=VALUE",
                    help="parameter for this run, typed by the FMU (a number, true/false, an enumeration item, text); repeat")
-    p.add_argument("--out", metavar="FILE", help="save the results as .csv or .parquet")
-    p.add_argument("--plot", metavar="PNG", help="plot every recorded variable against time")
+    p.add_argument("--out", metavar="FILE", type=output_file(".csv", ".parquet", what="results file"),
+                   help="save the results as .csv or .parquet (checked before the run)")
+    p.add_argument("--plot", metavar="PNG", type=output_file("plot"), help="plot every recorded variable against time")
     p.add_argument("--progress", action="store_true", help="show a progress bar")
     p.set_defaults(run=_cmd_simulate)
 
@@ -91,8 +151,10 @@ def register(commands) -> None:
     p.add_argument("--distance", type=float, required=True, help="move distance of the rigid body")
     p.add_argument("--candidate", action="append", choices=CANDIDATES, help="candidate to run; repeat (default: all)")
     p.add_argument("--step", type=float, default=1e-6, help="macro step and sampling period of every FMU in s (default 1e-6)")
-    p.add_argument("--fmus", default="fmus", help="folder where the FMUs are built and reused (default fmus)")
+    p.add_argument("--fmus", default="fmus", type=output_folder,
+                   help="folder where the FMUs are built and reused (default fmus)")
     p.add_argument("--u-max", type=float, default=None, help="input limit (default: the input's limit in the file)")
     p.add_argument("--tolerance", type=float, default=1e-3, help="settling band of the move time, relative to X and U")
-    p.add_argument("--plot", metavar="PNG", help="save u, position error and deflection of every candidate")
+    p.add_argument("--plot", metavar="PNG", type=output_file("plot"),
+                   help="save u, position error and deflection of every candidate")
     p.set_defaults(run=_cmd_compare)

@@ -64,6 +64,7 @@ from shapefmu.cosim.types import enumeration_items, kind_of, typed_value
 from shapefmu.cosim.loading import load_units
 from shapefmu.cosim.units import FMUFailure
 from shapefmu.fmi.ssp import System, read_ssp
+from shapefmu.runtime.checks import check_size
 
 ALGORITHMS = ("gauss-seidel", "jacobi")
 LOOP_SOLVERS = ("newton", "fixed-point")
@@ -146,6 +147,9 @@ class Master:
     def _interval(self, output_interval):
         if output_interval is None:
             return 1
+        if not (isinstance(output_interval, (int, float)) and math.isfinite(output_interval) and output_interval > 0):
+            raise ValueError(f"output_interval must be a finite whole multiple > 0 of step {self.step!r} s, "
+                             f"got {output_interval!r}")
         ratio = output_interval / self.step
         every = round(ratio)
         if every < 1 or abs(every - ratio) > 1e-9 * ratio:
@@ -309,7 +313,9 @@ class Master:
         n_steps = max(1, math.ceil(span - 1e-9))
         last = n_steps - 1
         rows = 1 + n_steps // self.output_interval + (1 if n_steps % self.output_interval else 0)
-        buf = np.empty(rows, dtype=step_program.buffer_dtype(self))
+        dtype = step_program.buffer_dtype(self)
+        _check_result_size(rows, dtype.itemsize, len(self.record), stop_time - t0, self.step * self.output_interval)
+        buf = np.empty(rows, dtype=dtype)
         self._buf, self._row = buf, 0
         self.termination = None
         t = t0
@@ -537,6 +543,13 @@ def simulate(system_or_path, stop_time: float, step: float, *, parameters: dict 
     """Run ``system_or_path`` once with :class:`Master` and return the recorded results."""
     with Master(system_or_path, step, **kwargs) as master:
         return master.run(stop_time, parameters=parameters)
+
+
+def _check_result_size(rows: int, row_bytes: int, variables: int, span: float, interval: float) -> None:
+    """Refuse, before the first step, a run whose recorded results would not fit in memory."""
+    check_size(rows * row_bytes, "MAX_RESULT_BYTES",
+               f"recording {variables} variable(s) every {interval!r} s over {span!r} s ({rows:.4g} rows) needs",
+               "bytes", "record fewer variables (--record) or less often (--output-interval)")
 
 
 def save_results(results: np.ndarray, path) -> Path:

@@ -33,6 +33,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from xml.etree import ElementTree as ET
 
+from shapefmu.fmi.archives import extract_system, read_description
 from shapefmu.fmi.ssp_targets import for_target
 from shapefmu.fmi.variable_types import KINDS, enumeration_items, kind_of, typed_value
 
@@ -103,9 +104,7 @@ def _split(reference: str, what: str) -> tuple[str, str]:
 
 def _fmu_connectors(fmu: Path) -> dict[str, Connector]:
     """Inputs, outputs and parameters of an FMU, read from its modelDescription.xml."""
-    from fmpy import read_model_description
-
-    description = read_model_description(str(fmu), validate=False)
+    description = read_description(fmu)
     connectors = {}
     for variable in description.modelVariables:
         kind = kind_of(variable)
@@ -391,21 +390,20 @@ def _parameter_values(parameter_set: ET.Element, where: str) -> dict:
 def read_ssp(path) -> System:
     """Read an .ssp archive or an .ssd file (or a folder holding SystemStructure.ssd) into a System.
 
-    FMUs of an archive are extracted to a temporary folder that lives as long as the process.
+    The members of an archive that the system uses are extracted, within the size limits, to a
+    temporary folder that lives as long as the process (see :mod:`shapefmu.fmi.archives`).
     """
     path = Path(path)
     if not path.exists():
         raise ValueError(f"SSP file not found: {path}")
     if path.is_dir():
+        if not (path / "SystemStructure.ssd").is_file():
+            raise ValueError(f"{path} is a directory without a SystemStructure.ssd; give an .ssp or .ssd file")
         path = path / "SystemStructure.ssd"
     if zipfile.is_zipfile(path):
         folder = Path(tempfile.mkdtemp(prefix=f"shapefmu_ssp_{path.stem}_"))
         _TEMPORARY_FOLDERS.append(folder)
-        with zipfile.ZipFile(path) as archive:
-            archive.extractall(folder)
-        ssd = folder / "SystemStructure.ssd"
-        if not ssd.is_file():
-            raise ValueError(f"{path}: the archive holds no SystemStructure.ssd")
+        ssd = extract_system(path, folder)
         return _read_ssd(ssd, origin=f"{path}!SystemStructure.ssd")
     return _read_ssd(path, origin=str(path))
 

@@ -22,12 +22,19 @@ def kind_of(variable) -> str | None:
 
 
 _TRUE, _FALSE = ("true", "1"), ("false", "0")
+# fmi2Integer is a C int (fmi2TypesPlatform.h), as is fmi3Int32: 32 bits on every platform.
+INTEGER_RANGE = (-(2**31), 2**31 - 1)
 
 
 def typed_value(value, kind: str, items: dict[str, int] | None = None, what: str = "value"):
     """``value`` (a Python value or the text of a command line / parameter file) as the Python value
-    of an FMI variable of ``kind``; an Enumeration takes an item name (``items``) or its integer."""
+    of an FMI variable of ``kind``; an Enumeration takes an item name (``items``) or its integer.
+
+    Nothing is lost on the way: ``1.5`` for an Integer is refused, not truncated to 1, and an
+    integer beyond the 32 bits of fmi2Integer / fmi3Int32 is refused, not wrapped around by ctypes.
+    """
     text = value.strip() if isinstance(value, str) else None
+    low, high = INTEGER_RANGE
     try:
         if kind == "Real":
             if isinstance(value, bool):
@@ -47,11 +54,12 @@ def typed_value(value, kind: str, items: dict[str, int] | None = None, what: str
         if isinstance(number, bool) or not isinstance(number, int) and not (isinstance(number, float) and number.is_integer()):
             raise ValueError
         number = int(number)
-        if kind == "Enumeration" and items and number not in items.values():
+        if not low <= number <= high or kind == "Enumeration" and items and number not in items.values():
             raise ValueError
         return number
-    except (TypeError, ValueError):
-        valid = {"Real": "a number", "Integer": "an integer", "Boolean": "true, false, 1 or 0", "String": "text",
+    except (TypeError, ValueError, OverflowError):
+        valid = {"Real": "a number", "Integer": f"an integer in [{low}, {high}]", "Boolean": "true, false, 1 or 0",
+                 "String": "text",
                  "Enumeration": f"one of {', '.join(items)} or its number" if items else "an integer"}[kind]
         raise ValueError(f"{what} must be {valid} ({kind}), got {value!r}") from None
 

@@ -23,12 +23,14 @@ from __future__ import annotations
 
 import math
 import os
+import re
 import tomllib
 from dataclasses import dataclass
 
 import control
 
 from shapefmu.plants import library
+from shapefmu.runtime.checks import check_text
 from shapefmu.plants.model import Parameter, Plant
 
 
@@ -41,6 +43,10 @@ class ParameterSpec:
     required: bool = True
     units: dict | None = None
 
+
+# Names in a model file (the plant, its signals) become C identifiers, FMI variable names and file
+# names in the plant-FMU generator, so they are identifiers and nothing else.
+IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 
 _FREQUENCY = {"Hz": 2.0 * math.pi, "rad/s": 1.0}
 _LENGTH = {"m": 1.0, "in": library.INCH, "mm": 1e-3}
@@ -98,9 +104,30 @@ def _build(kind: str, p: dict, name: str, input_name: str, u_max) -> Plant:
 
 
 def _finite(value, where):
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise ValueError(f"{where} must be a finite number, got {value!r}")
+    # An integer too large for a double (TOML integers have any size in tomllib) is not finite either.
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(_as_float(value)):
+        raise ValueError(f"{where} must be a finite number, got {_shown(value)}")
     return float(value)
+
+
+def _as_float(value) -> float:
+    try:
+        return float(value)
+    except OverflowError:
+        return math.inf
+
+
+def _shown(value) -> str:
+    text = repr(value)
+    return text if len(text) <= 60 else f"{text[:40]}... ({len(text)} characters)"
+
+
+def _identifier(value, where) -> str:
+    """A name that becomes a C identifier, an FMI variable name and a file name: [A-Za-z_][A-Za-z0-9_]*."""
+    if not isinstance(value, str) or not IDENTIFIER.fullmatch(value):
+        raise ValueError(f"{where} must be an identifier ([A-Za-z_][A-Za-z0-9_]*, e.g. disk_drive), "
+                         f"got {_shown(value)}")
+    return value
 
 
 def _parameter(raw, spec: ParameterSpec, where: str):
@@ -110,12 +137,15 @@ def _parameter(raw, spec: ParameterSpec, where: str):
     extra = set(raw) - {"value", "unit", "description"}
     if extra:
         raise ValueError(f"{where} has unknown field(s) {sorted(extra)}; allowed: value, unit, description")
+    if "description" in raw:
+        check_text(raw["description"], f"{where}.description")
     unit = raw.get("unit")
     if not isinstance(unit, str) or not unit.strip():
         raise ValueError(f"{where}.unit is missing: every parameter needs a unit"
                          + (f" (one of {sorted(spec.units)})" if spec.units else ""))
     if spec.units is not None and unit not in spec.units:
         raise ValueError(f"{where}.unit must be one of {sorted(spec.units)}, got {unit!r}")
+    check_text(unit, f"{where}.unit")
     factor = spec.units[unit] if spec.units is not None else 1.0
     value = raw["value"]
     if spec.array:
@@ -132,8 +162,12 @@ def _signals(data, key, count, source):
     if not isinstance(table, dict) or not table:
         raise ValueError(f"{source}: [{key}] must be a table naming the {key} with their units")
     for signal, fields in table.items():
+        _identifier(signal, f"{source}: the name of {key}.{signal}")
         if not isinstance(fields, dict) or not isinstance(fields.get("unit"), str) or not fields["unit"].strip():
             raise ValueError(f"{source}: {key}.{signal}.unit is missing: every signal needs a unit")
+        check_text(fields["unit"], f"{source}: {key}.{signal}.unit")
+        if "description" in fields:
+            check_text(fields["description"], f"{source}: {key}.{signal}.description")
         extra = set(fields) - {"unit", "max", "description"}
         if extra or (key == "outputs" and "max" in fields):
             allowed = "unit, max, description" if key == "inputs" else "unit, description"
@@ -155,9 +189,12 @@ def loads(text: str, source: str = "<string>") -> Plant:
     if extra:
         raise ValueError(f"{source}: unknown top-level field(s) {sorted(extra)}; allowed: {sorted(allowed)}")
     kind = data.get("kind")
-    if kind not in PARAMETER_SPECS:
-        raise ValueError(f"{source}: kind must be one of {list(PARAMETER_SPECS)}, got {kind!r}")
-    name = data.get("name", os.path.splitext(os.path.basename(source))[0])
+    if not isinstance(kind, str) or kind not in PARAMETER_SPECS:
+        raise ValueError(f"{source}: kind must be one of {list(PARAMETER_SPECS)}, got {_shown(kind)}")
+    name = _identifier(data.get("name", os.path.splitext(os.path.basename(source))[0]), f"{source}: name")
+    for key in ("description", "source"):
+        if key in data:
+            check_text(data[key], f"{source}: {key}")
     specs = PARAMETER_SPECS[kind]
     raw_parameters = data.get("parameters")
     if not isinstance(raw_parameters, dict):
@@ -198,6 +235,8 @@ def load(path) -> Plant:
             text = handle.read()
     except OSError as error:
         raise ValueError(f"{path}: cannot read plant model: {error.strerror}") from None
+    except UnicodeDecodeError as error:
+        raise ValueError(f"{path}: not a plant model (not UTF-8 text: {error.reason} at byte {error.start})") from None
     return loads(text, source=path)
 
 

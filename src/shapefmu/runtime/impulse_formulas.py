@@ -13,6 +13,7 @@ La-orpacharapan & Pao (paper 002) for one mode:
 import cmath
 import math
 
+from . import limits
 from .checks import check_count, check_omega, check_zeta
 
 
@@ -35,6 +36,9 @@ def zv_dn(omega, zeta, n):
     vibration and its first n derivatives with respect to frequency vanish at the design point.
     """
     n = check_count(n, "n", minimum=0)
+    if n > limits.MAX_ZV_DN_ORDER:
+        raise ValueError(f"n must be in [0, {limits.MAX_ZV_DN_ORDER}] (shapefmu.runtime.limits.MAX_ZV_DN_ORDER: "
+                         f"ZV convolved n + 1 times is (n + 1)/2 periods long), got {n}")
     sigma, omega_d = _damped(omega, zeta)
     half_period = math.pi / omega_d
     k = math.exp(-sigma * half_period)

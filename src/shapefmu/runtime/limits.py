@@ -1,9 +1,55 @@
-"""The limits our FMUs enforce at run time, in one place.
+"""Every limit of shapefmu in one place: what it bounds, and why it has that value.
 
-Standard library only: bundled into every FMU with the rest of ``runtime/``. The native C FMUs
-enforce the same numbers (the spec of the sampled semantics is shared). Each limit below says what
-it bounds, its value, and why that value.
+A hostile or careless input can ask for a design, a run or a file of any size: ZVD convolved over
+20 modes is 3^20 impulses, a 1 ps sampling period gives a delay line of 10^9 samples, a 1.3 MB
+archive can declare a 1 GB member. shapefmu estimates the size first and refuses past these limits,
+with the estimate in the message, rather than running for hours or exhausting memory. Each limit is
+read at the time of the check (``limits.NAME``, not a copy imported by value), so a program that
+really needs more may raise it before the call: ``shapefmu.runtime.limits.MAX_SAMPLED_LENGTH = ...``.
 
+Standard library only: this module is copied into every FMU with the rest of ``runtime/``.
+
+Design layer and FMUs (``runtime/``, ``shapers/``)
+---------------------------------------------------
+MAX_IMPULSES = 10_000
+    Impulses of one impulse shaper, counted before coincident impulses merge: for a shaper
+    convolved over several modes, the product of the per-mode counts. The convolution takes that
+    many products (ZVD over 20 modes: 3.5e9, minutes and gigabytes), and a streaming filter costs
+    one multiply-add per impulse per sample, so 10^4 keeps a step under a millisecond in Python.
+    ZVDD on the four modes a Shaper FMU takes is 256.
+MAX_ZV_DN_ORDER = 100
+    Derivative order n of ``zv_dn``, ZV convolved n + 1 times. Its amplitudes are
+    C(n+1, i) K^i / (1 + K)^(n+1): the normalisation overflows a double past n = 1022, and the
+    shaper is (n + 1)/2 periods long, so n = 100 (50 periods) is already far beyond any use.
+MAX_SAMPLED_LENGTH = 1_000_000
+    Samples of one sampled design: the taps of a shape filter, the delay line of an impulse shaper
+    on its sampling grid (its duration / Ts + 1), a sampled motion profile or kernel. A filter's
+    ring buffer holds twice that many Python references (16 MB), and a design of 10^6 samples is
+    1 s at 1 us sampling; a 1 ps period on a 2 kHz shaper would ask for 5e8.
+MAX_CONVOLUTION_PRODUCTS = 50_000_000
+    Multiply-adds of the order-n self-convolution of a window filter (paper 000, eq. 1),
+    about M^2 n^2 / 2 for a window of M + 1 taps: done in pure Python at roughly 50 ns each, this
+    is a few seconds. Order 1000 of a 200-tap Hanning filter would need 2e10 (20 minutes).
+
+Plants (``plants/``, ``fmi/native/``)
+-------------------------------------
+MAX_PLANT_STATES = 200
+    States of a plant model that the plant-FMU generator compiles. The generated C holds dense
+    n x n Jacobians and the zero-order-hold step computes an n x n matrix exponential; CasADi's
+    code generation and gcc grow faster than n^2 (n = 100 takes 40 s to build here, n = 200 80 s).
+
+Co-simulation results and sweeps (``cosim/``, ``sweep/``, ``stos.py``)
+---------------------------------------------------------------------
+MAX_RESULT_BYTES = 2 * 2**30
+    Bytes of the results one run records (rows x recorded variables x 8 B), estimated before the
+    first step: the result is one array in memory. 2 GiB is 2.7e8 rows of one variable; a run that
+    needs more is given a longer ``--output-interval`` or fewer ``--record`` variables.
+MAX_SWEEP_POINTS = 10_000_000
+    Parameter points of one sweep: the grid is one array in memory, and every point is a run;
+    ten million runs of even 1 ms are three hours on a core.
+
+Sampled FMUs at run time (``runtime/sample_clock.py``; the native C FMUs use the same numbers)
+----------------------------------------------------------------------------------------------
 SAMPLE_TOLERANCE = 1e-6 (relative to the sampling period Ts)
     A sampled FMU takes its samples at s_k = t0 + k Ts (``runtime.sample_clock``). An instant s_k
     counts as reached at time tau when s_k <= tau + SAMPLE_TOLERANCE * Ts, and tau is "on the grid"
@@ -18,7 +64,27 @@ MAX_SAMPLES_PER_STEP = 10_000_000
     kernel (about 1 us for a shaper, tens of us for the EKF), so the bound keeps a step under
     about ten seconds for a shaper; a longer step (h = 1e300) is a host's mistake, answered at
     once with fmi2Error and a message naming the bound instead of a step that never returns.
+
+Files from users (``fmi/archives.py``)
+--------------------------------------
+MAX_ARCHIVE_MEMBER_BYTES = 2**30
+    Bytes one member of an ``.ssp`` archive (the .ssd, an FMU, an .ssv) may extract to, and bytes
+    an FMU's whole content may extract to. The size an archive declares is checked before anything
+    is written (zipfile never writes more than a member declares): a 1.3 MB archive can declare a
+    1 GB member (a "zip bomb"). 1 GiB is far above the FMUs shapefmu builds (0.05-0.2 MB); only
+    the members a system uses are extracted at all.
+MAX_ARCHIVE_BYTES = 4 * 2**30
+    Bytes all the members a system uses may extract to together.
 """
 
+MAX_IMPULSES = 10_000
+MAX_ZV_DN_ORDER = 100
+MAX_SAMPLED_LENGTH = 1_000_000
+MAX_CONVOLUTION_PRODUCTS = 50_000_000
+MAX_PLANT_STATES = 200
+MAX_RESULT_BYTES = 2 * 2**30
+MAX_SWEEP_POINTS = 10_000_000
+MAX_ARCHIVE_MEMBER_BYTES = 2**30
+MAX_ARCHIVE_BYTES = 4 * 2**30
 SAMPLE_TOLERANCE = 1e-6
 MAX_SAMPLES_PER_STEP = 10_000_000

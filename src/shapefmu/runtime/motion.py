@@ -16,7 +16,7 @@ exact v, p at t = k ts and the mean acceleration over each sample period, 0 in t
 import bisect
 import math
 
-from .checks import check_finite, check_positive
+from .checks import check_finite, check_positive, check_size
 
 _SNAP = 1e-12
 
@@ -85,6 +85,8 @@ class PiecewiseAcceleration:
         """
         ts = check_positive(ts, "ts")
         if count is None:
+            check_size(self.breaks[-1] / ts + 2, "MAX_SAMPLED_LENGTH", f"a move of {self.breaks[-1]!r} s sampled at "
+                       f"ts = {ts!r} s has", "samples", "use a longer ts")
             count = math.ceil(self.breaks[-1] / ts) + 2
         t = [k * ts for k in range(count)]
         states = [self.state(x) for x in t]

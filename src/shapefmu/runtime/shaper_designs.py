@@ -12,7 +12,7 @@ derivative order of ``zv_dn``, ``vtol`` the tolerable vibration of ei, ei2 and e
 import math
 
 from . import ei, impulse_formulas, multimode
-from .checks import check_count, check_omega, check_positive, check_zeta
+from .checks import check_count, check_omega, check_positive, check_size, check_zeta
 
 # Every single-mode design as (omega, zeta, n, vtol) -> (times, amplitudes).
 SINGLE_MODE = {
@@ -40,9 +40,10 @@ def design_impulses(kind, modes, n=1, vtol=0.05):
     modes = multimode.check_modes(modes)
     if kind == "simultaneous":
         return multimode.simultaneous(modes)
+    per_mode = [SINGLE_MODE[kind](omega, zeta, n, vtol) for omega, zeta in modes]
+    check_impulse_count(kind, [len(times) for times, _ in per_mode])
     impulses = [(0.0, 1.0)]
-    for omega, zeta in modes:
-        times, amplitudes = SINGLE_MODE[kind](omega, zeta, n, vtol)
+    for times, amplitudes in per_mode:
         impulses = [(t + s, a * b) for t, a in impulses for s, b in zip(times, amplitudes)]
     impulses.sort()
     tolerance = _MERGE * max(impulses[-1][0] - impulses[0][0], 1.0)
@@ -53,6 +54,16 @@ def design_impulses(kind, modes, n=1, vtol=0.05):
         else:
             merged.append([t, a])
     return [t for t, _ in merged], [a for _, a in merged]
+
+
+def check_impulse_count(kind, counts):
+    """Refuse a convolved shaper whose impulse count, the product of the per-mode ``counts``, is
+    past ``limits.MAX_IMPULSES``, before the convolution builds it."""
+    total = math.prod(counts)
+    check_size(total, "MAX_IMPULSES", f"{kind} convolved over {len(counts)} modes "
+               f"({' x '.join(map(str, counts))}) would have", "impulses",
+               "use fewer modes, a shorter single-mode shaper or the simultaneous method")
+    return total
 
 
 def parameter_modes(values, max_modes, frequency="f", hertz=True):

@@ -18,7 +18,7 @@ max_alpha alpha(1-alpha) (w h)^2 / 2 <= (w h)^2 / 8 per unit of amplitude (secon
 import math
 from operator import mul
 
-from .checks import check_finite, check_positive
+from .checks import check_finite, check_positive, check_size
 
 # Impulse times within this fraction of a step from a grid point are taken to lie on it, so that a
 # time computed as 2.9999999999 h is not split into a 1e-10 sliver.
@@ -82,6 +82,8 @@ class StreamingShaper:
         for d in delays:
             if isinstance(d, bool) or not isinstance(d, int) or d < 0:
                 raise ValueError(f"delays must be integers >= 0, got {d!r}")
+        check_size(max(delays) + 1, "MAX_SAMPLED_LENGTH", "a filter whose longest delay is", "samples",
+                   "use a longer sampling period")
         self._pairs = tuple((d, check_finite(w, "weight")) for d, w in zip(delays, weights))
         self._length = max(delays) + 1
         self._first = min(delays)

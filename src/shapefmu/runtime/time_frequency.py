@@ -18,7 +18,7 @@ import math
 import operator
 from dataclasses import dataclass
 
-from .checks import check_omega, check_positive
+from .checks import check_omega, check_positive, check_size
 from .motion import PiecewiseAcceleration, held_acceleration
 from .scalar_search import minimize_bounded
 
@@ -36,6 +36,8 @@ def samples(move_time, ts):
     move_time = check_positive(move_time, "move_time")
     ts = check_positive(ts, "ts")
     m_real = move_time / ts
+    check_size(m_real, "MAX_SAMPLED_LENGTH", f"move_time / ts = {move_time!r} / {ts!r} gives M =", "samples",
+               "use a longer ts or a shorter move_time")
     m = round(m_real)
     if m < 2 or abs(m_real - m) > _RTOL * m_real:
         lo, hi = max(2, math.floor(m_real)), max(2, math.ceil(m_real))

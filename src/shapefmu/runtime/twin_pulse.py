@@ -18,7 +18,7 @@ import cmath
 import math
 from dataclasses import dataclass
 
-from .checks import check_count, check_finite, check_omega, check_positive, check_vtol
+from .checks import check_count, check_finite, check_omega, check_positive, check_size, check_vtol
 from .motion import PiecewiseAcceleration
 from .scalar_search import bisect
 
@@ -160,6 +160,8 @@ def _boxcars(t_tp, t_bc, t_tz, slew):
 
 def _kernel(t_tp, t_bc, ts):
     """TP * BC integrated over each sample period: a unit-area sequence at ts."""
+    check_size((t_tp + t_bc) / ts + 2, "MAX_SAMPLED_LENGTH",
+               f"a kernel of {t_tp + t_bc!r} s sampled at ts = {ts!r} s has", "samples", "use a longer ts")
     ramp = [
         0.5 * (min(max(k * ts, 0.0), t_bc) / t_bc) + 0.5 * (min(max(k * ts - t_tp, 0.0), t_bc) / t_bc)
         for k in range(math.ceil((t_tp + t_bc) / ts) + 1)

@@ -20,7 +20,7 @@ raises ValueError naming the nearest valid periods, unless ``adjust_ts`` picks t
 
 import math
 
-from .checks import check_count, check_finite, check_omega, check_positive, check_zeta
+from .checks import check_count, check_finite, check_omega, check_positive, check_size, check_zeta
 
 # Relative tolerance on ts for "M is an integer": ts given to ~10 significant digits is accepted.
 _TS_RTOL = 1e-9
@@ -41,7 +41,12 @@ def window_length(omega_d, ts, adjust_ts, m_of_ts, ts_of_m, minimum, formula):
     window's transform). ``formula`` names the relation in error messages.
     """
     ts = check_positive(ts, "ts")
-    m_real = m_of_ts(omega_d * ts)
+    try:
+        m_real = m_of_ts(omega_d * ts)
+    except ZeroDivisionError:  # omega_d * ts underflowed to 0
+        m_real = math.inf
+    check_size(m_real, "MAX_SAMPLED_LENGTH", f"ts = {ts!r} s gives a window of M = {formula} =", "samples",
+               "use a longer ts")
     candidates = sorted({max(minimum, math.floor(m_real)), max(minimum, math.ceil(m_real))})
     nearest = min(candidates, key=lambda m: abs(ts_of_m(m) / omega_d - ts))
     ts_nearest = ts_of_m(nearest) / omega_d
@@ -58,6 +63,8 @@ def window_length(omega_d, ts, adjust_ts, m_of_ts, ts_of_m, minimum, formula):
 
 def convolve(a, b):
     """Full discrete convolution of two sequences (length len(a) + len(b) - 1)."""
+    check_size(len(a) * len(b), "MAX_CONVOLUTION_PRODUCTS",
+               f"convolving windows of {len(a)} and {len(b)} samples takes", "multiply-adds", "use a longer ts")
     out = [0.0] * (len(a) + len(b) - 1)
     for i, x in enumerate(a):
         if x:
@@ -66,9 +73,19 @@ def convolve(a, b):
     return out
 
 
+def check_order_cost(length, order):
+    """Refuse order n of a ``length``-tap filter past the limits, before convolving: eq. (1) repeats
+    the convolution n - 1 times on a growing sequence, about length^2 n^2 / 2 multiply-adds."""
+    check_size(order * (length - 1) + 1, "MAX_SAMPLED_LENGTH", f"order {order} of a {length}-tap window has",
+               "taps", "use a lower order or a longer ts")
+    check_size(length * length * order * (order - 1) // 2, "MAX_CONVOLUTION_PRODUCTS",
+               f"order {order} of a {length}-tap window takes", "multiply-adds", "use a lower order or a longer ts")
+
+
 def _shape(h, omega_n, zeta, ts, order):
     """Damping compensation and normalisation (section 3), then order n by eq. (1)."""
     order = check_count(order, "order", 1)
+    check_order_cost(len(h), order)
     f = [v * math.exp(-zeta * omega_n * k * ts) for k, v in enumerate(h)]
     total = math.fsum(f)
     f = [v / total for v in f]

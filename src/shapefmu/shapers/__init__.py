@@ -5,7 +5,7 @@ multi-mode designs take a sequence of ``(omega, zeta)`` modes. Design layer: imp
 (whose formulas the FMUs re-run) and numpy / scipy, nothing above.
 """
 
-from shapefmu.shapers.catalog import KINDS, design
+from shapefmu.shapers.catalog import KINDS, check_sampling, design
 from shapefmu.shapers.ei import ei, ei2, ei3
 from shapefmu.shapers.impulse import ImpulseShaper, mzv, um_zv, zv, zv_dn, zvd, zvdd
 from shapefmu.shapers.multimode import check_modes, convolve_modes, simultaneous
@@ -57,6 +57,7 @@ __all__ = [
     "bc_vr",
     "blackman_filter",
     "check_modes",
+    "check_sampling",
     "convolve_modes",
     "convolved_filter",
     "design",

@@ -10,22 +10,28 @@ from collections.abc import Callable, Sequence
 
 from shapefmu.runtime import multimode
 from shapefmu.runtime.multimode import check_modes
+from shapefmu.runtime.shaper_designs import check_impulse_count
 from shapefmu.shapers.impulse import ImpulseShaper, zv
 
 Mode = tuple[float, float]
 
 
 def convolve_modes(
-    modes: Sequence[Mode], base: Callable[[float, float], ImpulseShaper] = zv
+    modes: Sequence[Mode], base: Callable[[float, float], ImpulseShaper] = zv, name: str | None = None
 ) -> ImpulseShaper:
     """Convolution method (paper 002, section II-A): one ``base`` shaper per mode, convolved.
 
     With ``base=zv`` and M modes this gives 2^M impulses at sums of the half periods
     pi/omega_di, with products of the ZV amplitudes (eq. 3) as amplitudes; it is exactly zero at
     every mode because the product of spectra vanishes wherever one factor does.
+
+    ``name`` names the base shaper in the error raised when the product of the per-mode impulse
+    counts is past ``runtime.limits.MAX_IMPULSES`` (default: the function's name).
     """
     checked = check_modes(modes)
-    return functools.reduce(ImpulseShaper.convolve, (base(w, z) for w, z in checked))
+    shapers = [base(w, z) for w, z in checked]
+    check_impulse_count(name or getattr(base, "__name__", "the base shaper"), [len(s) for s in shapers])
+    return functools.reduce(ImpulseShaper.convolve, shapers)
 
 
 def simultaneous(modes: Sequence[Mode], starts_per_axis: int = 10) -> ImpulseShaper:

@@ -40,6 +40,7 @@ def _sampled(design, order):
     """
     taps, ts = design
     order = check_count(order, "order", 1)
+    window_filters.check_order_cost(len(taps), order)
     f = np.array(taps, dtype=float)
     out = f
     for _ in range(order - 1):

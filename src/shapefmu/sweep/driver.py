@@ -20,7 +20,8 @@ Runs go to a ``distributed.LocalCluster`` (one single-threaded worker process pe
 run past ``timeout`` is interrupted and its master replaced); the runs of a lost worker are
 rescheduled by Dask, and a task that still fails (``retries=`` exhausted, ``KilledWorker``)
 becomes error rows; rows are appended to the output file as they arrive, and ``resume=True``
-skips the points that already have a row there.
+skips the points that already have a row there (``retry_failed=True``: except those whose row is an
+error or a timeout). When the sweep ends the file is written anew with one row per point.
 """
 
 from __future__ import annotations
@@ -40,6 +41,17 @@ from shapefmu.sweep.points import Points, _points
 from shapefmu.sweep.runs import _run_batch
 from shapefmu.sweep.store import FIXED_COLUMNS, Store, as_array, columns, metric_names_in_file
 from shapefmu.sweep.target import Cosim, _SystemFile
+
+
+# Statuses of a resumed row that ``retry_failed`` runs again: the run did not give its answer.
+RETRIED_STATUSES = ("error", "timeout")
+
+
+class SweepRows(np.ndarray):
+    """A sweep's rows (a numpy structured array), knowing how many were resumed from its output file."""
+
+    resumed = 0
+    resumed_failed = 0
 
 
 # ---------------------------------------------------------------------------------------------
@@ -106,7 +118,7 @@ def _batches(todo: list[int], points: Points, size: int):
 
 def sweep(target, points, *, metrics=None, out=None, client=None, n_workers: int | None = None,
           timeout: float | None = None, resume: bool = True, progress: bool = True, batch_size: int | None = None,
-          retries: int = 2, vectorized: bool = False) -> np.ndarray:
+          retries: int = 2, vectorized: bool = False, retry_failed: bool = False) -> SweepRows:
     """Run ``target`` at every point and return one row per point as a structured array.
 
     Parameters
@@ -128,6 +140,9 @@ def sweep(target, points, *, metrics=None, out=None, client=None, n_workers: int
         Seconds a run may take before it is interrupted and recorded as "timeout".
     resume : bool
         Keep the rows already in ``out`` and run only the points without one.
+    retry_failed : bool
+        With ``resume``, run again the points whose row in ``out`` is an "error" or a "timeout" (a
+        "non-finite" result is the run's answer, and is kept); the new row replaces the old one.
     batch_size : int, optional
         Runs per Dask task (default: about ten tasks per worker, at most 20 runs each).
     retries : int
@@ -135,13 +150,18 @@ def sweep(target, points, *, metrics=None, out=None, client=None, n_workers: int
 
     Returns
     -------
-    numpy structured array with fields ``run``, the parameters, the metrics, ``status``,
-    ``error`` and ``wall_time`` (s), in the order of ``points``.
+    SweepRows
+        A numpy structured array with fields ``run``, the parameters, the metrics, ``status``,
+        ``error`` and ``wall_time`` (s), in the order of ``points``; ``rows.resumed`` of them were
+        read from ``out`` rather than run (``rows.resumed_failed`` of those an "error" or a "timeout").
     """
     points = _points(points)
     metric_list = _metric_list(metrics)
     if timeout is not None:
         timeout = check_positive(timeout, "timeout")
+    if n_workers is not None and (isinstance(n_workers, bool) or not isinstance(n_workers, int) or n_workers < 1):
+        raise ValueError(f"n_workers must be an integer >= 1 (worker processes of the local cluster), "
+                         f"got {n_workers!r}")
     if batch_size is not None and (isinstance(batch_size, bool) or not isinstance(batch_size, int) or batch_size < 1):
         raise ValueError(f"batch_size must be an integer >= 1, got {batch_size!r}")
     if isinstance(retries, bool) or not isinstance(retries, int) or retries < 0:
@@ -152,9 +172,9 @@ def sweep(target, points, *, metrics=None, out=None, client=None, n_workers: int
     if vectorized:
         if isinstance(target, Cosim) or metric_list:
             raise ValueError("vectorized=True takes a callable returning {metric: array}, without metrics=")
-        return _sweep_vectorized(target, points, out)
+        return _sweep_vectorized(target, points, out).view(SweepRows)
     return _sweep_distributed(target, points, metric_list, out, client, n_workers, timeout, resume, progress,
-                              batch_size, retries)
+                              batch_size, retries, retry_failed)
 
 
 def _sweep_vectorized(func, points: Points, out) -> np.ndarray:
@@ -179,7 +199,7 @@ def _sweep_vectorized(func, points: Points, out) -> np.ndarray:
 
 
 def _sweep_distributed(target, points, metric_list, out, client, n_workers, timeout, resume, progress,
-                       batch_size, retries):
+                       batch_size, retries, retry_failed):
     key_of = {tuple(map(float, points.values[i])): i for i in range(len(points))}
     store = None
     rows_by_run: dict[int, dict] = {}
@@ -187,15 +207,19 @@ def _sweep_distributed(target, points, metric_list, out, client, n_workers, time
     if not metric_names and out is not None and resume:
         # A target returning {metric: value}: its metrics are known from the file being resumed.
         metric_names = metric_names_in_file(out, points.names)
-    other_points = []  # rows of the output file for points outside this sweep: kept in the file
+    other_points = {}  # rows of the output file for points outside this sweep: kept in the file
     if out is not None and metric_names:
         store = Store(out, columns(points.names, metric_names), resume)
-        for row in store.done:
-            i = key_of.get(tuple(row[n] for n in points.names))
-            if i is not None:
-                rows_by_run[i] = {**row, "run": i}
+        for row in store.done:  # in file order: a point's later row (a retried run) replaces its earlier one
+            key = tuple(row[n] for n in points.names)
+            if key in key_of:
+                rows_by_run[key_of[key]] = {**row, "run": key_of[key]}
             else:
-                other_points.append(row)
+                other_points[key] = row
+    if retry_failed:
+        for i in [i for i, row in rows_by_run.items() if row["status"] in RETRIED_STATUSES]:
+            del rows_by_run[i]
+    resumed = dict(rows_by_run)
     todo = [i for i in range(len(points)) if i not in rows_by_run]
     meter = _Progress(len(points), len(rows_by_run), progress)
     c, cluster, opened = _open_client(client, n_workers) if todo else (None, None, False)
@@ -234,8 +258,11 @@ def _sweep_distributed(target, points, metric_list, out, client, n_workers, time
     ordered = [rows_by_run[i] for i in range(len(points))]
     header = columns(points.names, metric_names)
     if store is not None:
-        store.close(ordered + other_points)
-    return as_array(ordered, header)
+        store.close(ordered + list(other_points.values()))
+    rows = as_array(ordered, header).view(SweepRows)
+    rows.resumed = len(resumed)
+    rows.resumed_failed = sum(row["status"] in RETRIED_STATUSES for row in resumed.values())
+    return rows
 
 
 def _run_on_cluster(c, target, points, todo, metric_list, timeout, batch_size, retries):

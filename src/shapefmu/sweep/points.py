@@ -8,6 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from shapefmu.runtime.checks import check_size
 from shapefmu.sweep.store import FIXED_COLUMNS
 
 
@@ -27,6 +28,7 @@ class Points:
             raise ValueError(f"parameter names must be distinct and not one of {FIXED_COLUMNS}, got {names}")
         if not np.all(np.isfinite(values)):
             raise ValueError("parameter values must be finite")
+        _check_distinct(names, values)
         values.setflags(write=False)
         object.__setattr__(self, "names", names)
         object.__setattr__(self, "values", values)
@@ -38,25 +40,43 @@ class Points:
         return dict(zip(self.names, map(float, self.values[i])))
 
 
+def _check_distinct(names, values: np.ndarray) -> None:
+    """A sweep has one row per point and resumes by the point's values: a point given twice would
+    be run twice and written twice on every rerun, so it is refused."""
+    if len(values) < 2:
+        return
+    _, first, counts = np.unique(values, axis=0, return_index=True, return_counts=True)
+    if np.any(counts > 1):
+        repeated = values[first[np.argmax(counts > 1)]]
+        raise ValueError(f"parameter points must be distinct, but {dict(zip(names, map(float, repeated)))} appears "
+                         f"{int(counts.max())} times; list each value of a grid axis once")
+
+
+def _check_point_count(count, what) -> None:
+    check_size(count, "MAX_SWEEP_POINTS", f"{what} has", "points", "sweep a coarser grid or fewer samples")
+
+
 def parse_vary(text: str) -> tuple[str, np.ndarray]:
     """``"name=start:stop:n"`` (n points from start to stop, ends included) or ``"name=v1,v2,..."``."""
     name, sep, spec = text.partition("=")
     name = name.strip()
     if not sep or not name or not spec.strip():
         raise ValueError(f"--vary must be NAME=START:STOP:N or NAME=V1,V2,..., got {text!r}")
-    try:
-        if ":" in spec:
+    if ":" in spec:
+        try:
             start, stop, count = spec.split(":")
-            n = int(count)
-            if n < 1:
-                raise ValueError(f"the number of points of {name} must be >= 1, got {n} in {text!r}")
-            values = np.linspace(float(start), float(stop), n)
-        else:
+            start, stop, n = float(start), float(stop), int(count)
+        except ValueError:
+            raise ValueError(f"--vary must be NAME=START:STOP:N or NAME=V1,V2,..., got {text!r}") from None
+        if n < 1:
+            raise ValueError(f"the number of points of {name} must be >= 1, got {n} in {text!r}")
+        _check_point_count(n, f"--vary {text!r}")
+        values = np.linspace(start, stop, n)
+    else:
+        try:
             values = np.array([float(v) for v in spec.split(",")])
-    except ValueError as error:
-        if "must be >= 1" in str(error):
-            raise
-        raise ValueError(f"--vary must be NAME=START:STOP:N or NAME=V1,V2,..., got {text!r}") from None
+        except ValueError:
+            raise ValueError(f"--vary must be NAME=START:STOP:N or NAME=V1,V2,..., got {text!r}") from None
     if not np.all(np.isfinite(values)):
         raise ValueError(f"values of {name} must be finite, got {text!r}")
     return name, values
@@ -69,6 +89,7 @@ def grid(*specs) -> Points:
         raise ValueError("a grid needs at least one spec such as 'plant.wn=3.36:3.66:10'")
     axes = [parse_vary(s) if isinstance(s, str) else (str(s[0]), np.asarray(s[1], dtype=float).ravel()) for s in specs]
     names = tuple(name for name, _ in axes)
+    _check_point_count(math.prod(len(values) for _, values in axes), f"the grid of {', '.join(names)}")
     mesh = np.meshgrid(*(values for _, values in axes), indexing="ij")
     return Points(names, np.stack([m.ravel() for m in mesh], axis=1))
 
@@ -90,6 +111,7 @@ def random_samples(n: int, ranges, seed: int = 0) -> Points:
     strings) with ``numpy.random.default_rng(seed)``: the same seed gives the same points."""
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
         raise ValueError(f"n must be an integer >= 1, got {n!r}")
+    _check_point_count(int(n), "the random sample")
     items = [parse_range(r) for r in ranges] if not isinstance(ranges, Mapping) else [
         (str(k), float(v[0]), float(v[1])) for k, v in ranges.items()]
     if not items:

@@ -59,6 +59,11 @@ def summary(rows: np.ndarray, metrics: Sequence[str]) -> str:
     """Counts per status and the range of each metric over the "ok" runs."""
     counts = ", ".join(f"{int(np.sum(rows['status'] == s))} {s}" for s in STATUSES if np.any(rows["status"] == s))
     lines = [f"{len(rows)} runs: {counts}"]
+    resumed = getattr(rows, "resumed", 0)  # a SweepRows from sweep(); a plain array has no such count
+    if resumed:
+        failed = getattr(rows, "resumed_failed", 0)
+        retry = f"; {failed} of those are errors or timeouts: --retry-failed runs them again" if failed else ""
+        lines.append(f"{resumed} of them resumed from the output file, not run again{retry}")
     ok = rows[rows["status"] == "ok"]
     for name in metrics:
         if ok.size:

@@ -43,8 +43,9 @@ def _parse_row(raw: dict, columns: list[str]) -> dict | None:
 
 class Store:
     """A sweep's rows on disk (see the module docstring). With ``resume`` the rows already there
-    are read into ``done`` (a partial last line is dropped); otherwise the file is started anew.
-    ``close(rows)`` writes the Parquet file from all the sweep's rows."""
+    are read into ``done`` in file order (a partial last line is dropped; an empty file or one cut
+    inside its header starts anew); otherwise the file is started anew. ``close(rows)`` writes the
+    file from all the sweep's rows, one per point."""
 
     def __init__(self, out, columns: list[str], resume: bool):
         self.out = Path(out)
@@ -63,7 +64,8 @@ class Store:
         else:
             for path in {self.out, self.journal}:
                 path.unlink(missing_ok=True)
-        new = not self.journal.exists()
+        # A file cut inside its header (killed while starting) is empty after _read_csv: it gets one.
+        new = not self.journal.exists() or self.journal.stat().st_size == 0
         self.file = open(self.journal, "a", newline="")
         self.writer = csv.DictWriter(self.file, fieldnames=columns)
         if new:
@@ -93,13 +95,20 @@ class Store:
         return table.to_pylist()
 
     def append(self, rows: list[dict]):
-        # repr: floats read back bit for bit, which matching resumed points relies on.
-        self.writer.writerows({c: repr(float(v)) if isinstance(v, float) else v for c, v in row.items()}
-                              for row in rows)
+        self.writer.writerows(map(_text, rows))
         self.file.flush()
 
     def close(self, rows: list[dict]):
+        """Write the file anew from ``rows``, one per point: a run retried after a failure was
+        appended after its old row, and the file keeps only the new one."""
         self.file.close()
+        if not self.parquet:
+            temporary = self.out.with_name(self.out.name + ".tmp")
+            with open(temporary, "w", newline="") as file:
+                writer = csv.DictWriter(file, fieldnames=self.columns)
+                writer.writeheader()
+                writer.writerows(map(_text, rows))
+            os.replace(temporary, self.out)
         if self.parquet:
             pa = pyarrow_module()
             table = pa.Table.from_pylist(rows, schema=_arrow_schema(pa, self.columns))
@@ -107,6 +116,11 @@ class Store:
             pa.parquet.write_table(table, temporary)
             os.replace(temporary, self.out)
             self.journal.unlink()
+
+
+def _text(row: dict) -> dict:
+    # repr: floats read back bit for bit, which matching resumed points relies on.
+    return {c: repr(float(v)) if isinstance(v, float) else v for c, v in row.items()}
 
 
 def pyarrow_module():
@@ -159,7 +173,10 @@ def metric_names_in_file(out, names) -> list[str]:
         found = pyarrow_module().parquet.read_schema(out).names
     elif (journal if out.suffix == ".parquet" else out).exists():
         with open(journal if out.suffix == ".parquet" else out, newline="") as file:
-            found = next(csv.reader(file), [])
+            header = file.readline()
+        if not header.endswith("\n"):  # empty, or cut inside the header by a kill: it names nothing
+            return []
+        found = next(csv.reader([header]), [])
     else:
         return []
     return [c for c in found if c not in FIXED_COLUMNS and c not in names]

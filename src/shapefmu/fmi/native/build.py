@@ -5,7 +5,7 @@ from __future__ import annotations
 import dataclasses
 import importlib.util
 import os
-import shutil
+import re
 import subprocess
 import tempfile
 import tomllib
@@ -20,6 +20,7 @@ from shapefmu.fmi.native.codegen import write_sources
 from shapefmu.fmi.native.model_part import ModelPart, check_name
 from shapefmu.fmi.native.nonlinear import NonlinearPlant
 from shapefmu.plants import as_plant
+from shapefmu.runtime.checks import check_size
 
 # The hand-written C shipped with every plant FMU (package data in fmi/native/c/).
 WRAPPER_SOURCES = ("plant_fmi2.c", "plant_expm.c")
@@ -32,8 +33,13 @@ WRAPPER_HEADERS_3 = ("plant_model.h", "plant_expm.h", "plant_fmi3.h", "fmi3Funct
 FMI_VERSIONS = ("2.0", "3.0")
 
 
+def _check_states(count: int, what: str) -> None:
+    check_size(count, "MAX_PLANT_STATES", f"{what} has", "states", "a plant FMU of that order takes too long to generate")
+
+
 def _from_model_file(path: Path, name: str | None) -> ModelPart:
     plant = as_plant(path)
+    _check_states(plant.n_states, f"plant model {path}")
     with open(path, "rb") as handle:
         data = tomllib.load(handle)
     units = {signal: fields.get("unit", "") for key in ("inputs", "outputs") for signal, fields in data[key].items()}
@@ -47,6 +53,7 @@ def to_model_part(model, name: str | None = None) -> ModelPart:
     if name is not None:
         check_name(name, "name")
     if isinstance(model, NonlinearPlant):
+        _check_states(len(model.states), f"nonlinear plant {model.name!r}")
         part = model.model_part()
         if name is not None:
             part = dataclasses.replace(part, name=name)
@@ -54,6 +61,7 @@ def to_model_part(model, name: str | None = None) -> ModelPart:
     if isinstance(model, (str, os.PathLike)):
         return _from_model_file(Path(model), name)
     plant = as_plant(model)
+    _check_states(plant.n_states, f"plant {plant.name!r}")
     return linear.model_part(plant, name=name)
 
 
@@ -81,8 +89,10 @@ def build_plant_fmu(model, out_path, *, name: str | None = None, fmi_version: st
     fmi3 = fmi_version == "3.0"
     wrapper_sources = WRAPPER_SOURCES_3 if fmi3 else WRAPPER_SOURCES
     describe = description3.model_description if fmi3 else description.model_description
-    part = to_model_part(model, name)
     out_path = Path(out_path)
+    if out_path.is_dir():
+        raise ValueError(f"out_path {str(out_path)!r} is a folder; give the FMU file to write, e.g. {out_path / 'Plant.fmu'}")
+    part = to_model_part(model, name)
     identifier = description.model_identifier(part)
     with tempfile.TemporaryDirectory(prefix="shapefmu_plant_") as tmp:
         root = Path(tmp)
@@ -107,13 +117,18 @@ def build_plant_fmu(model, out_path, *, name: str | None = None, fmi_version: st
             for path in sorted(root.rglob("*")):
                 if path.is_file():
                     archive.write(path, path.relative_to(root).as_posix())
-        shutil.move(partial, out_path)
+        os.replace(partial, out_path)
     return out_path
 
 
 def fmu_file_name(model_name: str) -> str:
-    """``disk_drive`` -> ``DiskDrive.fmu`` (the file names of fmus/)."""
-    return "".join(word[:1].upper() + word[1:] for word in model_name.split("_")) + ".fmu"
+    """``disk_drive`` -> ``DiskDrive.fmu`` (the file names of fmus/). Characters other than letters,
+    digits and _ are dropped, so no name can climb out of the folder (``../x``) or name another."""
+    words = re.sub(r"[^A-Za-z0-9_]", "", model_name).split("_")
+    stem = "".join(word[:1].upper() + word[1:] for word in words)
+    if not stem:
+        raise ValueError(f"model name {model_name!r} has no letter or digit to name its FMU file by")
+    return stem + ".fmu"
 
 
 def model_from_file(path):

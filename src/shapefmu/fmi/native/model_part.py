@@ -14,6 +14,8 @@ from dataclasses import dataclass
 
 import casadi as ca
 
+from shapefmu.runtime.checks import check_text
+
 # What the C wrapper checks when a parameter is set (plant_model.h, PlantConstraint).
 CONSTRAINTS = ("any", "positive", "nonnegative", "nonzero", "damping_ratio")
 
@@ -43,6 +45,8 @@ class ScalarParameter:
 
     def __post_init__(self):
         check_name(self.name, "parameter name")
+        check_text(self.unit, f"unit of parameter {self.name}")
+        check_text(self.description, f"description of parameter {self.name}")
         if self.constraint not in CONSTRAINTS:
             raise ValueError(f"constraint of {self.name} must be one of {CONSTRAINTS}, got {self.constraint!r}")
 
@@ -82,9 +86,16 @@ class ModelPart:
     substep_parameter: str | None = None
 
     def __post_init__(self):
+        # The name and every description and unit reach modelDescription.xml (escaped there, but
+        # XML cannot carry control characters at all); the C sees only check_name'd names and the
+        # model identifier made of the name (description.model_identifier), never these strings.
+        check_text(self.name, "plant name")
+        check_text(self.description, f"description of plant {self.name!r}")
         for what, signals in (("state", self.states), ("input", self.inputs), ("output", self.outputs)):
             for signal in signals:
                 check_name(signal.name, f"{what} name")
+                check_text(signal.unit, f"unit of {what} {signal.name}")
+                check_text(signal.description, f"description of {what} {signal.name}")
         names = [f"state.{s.name}" for s in self.states] + [s.name for s in self.inputs + self.outputs]
         names += [p.name for p in self.parameters]
         duplicates = sorted({n for n in names if names.count(n) > 1})

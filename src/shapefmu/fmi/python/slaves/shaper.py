@@ -26,10 +26,10 @@ un-done.
 import math
 
 from ....runtime import shaper_designs
-from ....runtime.checks import check_count, check_finite, check_positive, check_vtol
+from ....runtime.checks import aliased_modes, check_count, check_finite, check_positive, check_size, check_vtol
 from ....runtime.sample_clock import SampleClock
 from ....runtime.shaper_filter import FeedthroughFIR, StreamingShaper, grid_impulses
-from ..slave_base import Fmi2Slave, sampled_description
+from ..slave_base import WARNING, Fmi2Slave, sampled_description
 
 MAX_MODES = 4
 KINDS = shaper_designs.KINDS
@@ -65,14 +65,25 @@ class Shaper(Fmi2Slave):
         n = check_count(values["n"], "n", minimum=0)
         ts = check_positive(values["Ts"], "Ts")
         u0 = check_finite(values["u0"], "u0")
-        times, amplitudes = shaper_designs.design_impulses(
-            values["kind"], shaper_designs.parameter_modes(values, MAX_MODES), n, vtol
-        )
+        modes = shaper_designs.parameter_modes(values, MAX_MODES)
+        times, amplitudes = shaper_designs.design_impulses(values["kind"], modes, n, vtol)
+        check_size(times[-1] / ts + 1, "MAX_SAMPLED_LENGTH", f"the {values['kind']} shaper, {times[-1]:.6g} s long, "
+                   f"sampled at Ts = {ts!r} s has a delay line of", "samples", "use a longer Ts")
+        self._warn_above_nyquist(modes, ts)
         delays, weights = grid_impulses(times, amplitudes, ts)
         self.design = (tuple(times), tuple(amplitudes))
         self.fir = FeedthroughFIR(delays, weights, u0)
         self.clock = SampleClock(ts, self.time)
         values["y"] = self.fir.output(check_finite(values["u"], "u"))
+
+    def _warn_above_nyquist(self, modes, ts):
+        """A mode at or above the Nyquist frequency of Ts is left ringing: say so through the logger."""
+        for i in aliased_modes(modes, ts):
+            omega, zeta = modes[i]
+            self.log(f"{self.model_name} {self.instance_name}: mode f[{i + 1}] = {self.values[f'f[{i + 1}]']!r} Hz is "
+                     f"at or above the Nyquist frequency 1/(2 Ts) = {0.5 / ts:.6g} Hz of Ts = {ts!r} s: the sampled "
+                     f"shaper cannot cancel it and leaves its vibration (up to all of it); use Ts < "
+                     f"{math.pi / (omega * math.sqrt(1.0 - zeta * zeta)):.6g} s", WARNING)
 
     def output_dependencies(self):
         return {"y": ["u"] if self.fir.w0 != 0.0 else []}
