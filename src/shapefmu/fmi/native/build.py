@@ -5,26 +5,22 @@ from __future__ import annotations
 import dataclasses
 import importlib.util
 import os
-import shutil
-import subprocess
+import sys
 import tempfile
 import tomllib
-import zipfile
-from importlib import resources
 from pathlib import Path
-
-import fmpy
 
 from shapefmu.fmi.native import description, linear
 from shapefmu.fmi.native.codegen import write_sources
+from shapefmu.fmi.native.compile import LAYER_HEADERS, LAYER_SOURCES, build_binaries, build_description, copy_c_files, zip_fmu
 from shapefmu.fmi.native.model_part import ModelPart, check_name
 from shapefmu.fmi.native.nonlinear import NonlinearPlant
 from shapefmu.plants import as_plant
 
-# The hand-written C shipped with every plant FMU (package data in fmi/native/c/).
-WRAPPER_SOURCES = ("plant_fmi2.c", "plant_expm.c")
-WRAPPER_HEADERS = ("plant_model.h", "plant_expm.h", "fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")
-COMPILE_FLAGS = ("-O2", "-shared", "-fPIC", "-std=c99", "-fvisibility=hidden")
+# The hand-written C shipped with every plant FMU (package data in fmi/native/c/): the generic FMI
+# 2.0 layer and the plants' part of it.
+WRAPPER_SOURCES = (*LAYER_SOURCES, "plant_fmi2.c", "plant_expm.c")
+WRAPPER_HEADERS = (*LAYER_HEADERS, "plant_model.h", "plant_expm.h")
 
 
 def _from_model_file(path: Path, name: str | None) -> ModelPart:
@@ -52,17 +48,6 @@ def to_model_part(model, name: str | None = None) -> ModelPart:
     return linear.model_part(plant, name=name)
 
 
-def _compile(sources: Path, binary: Path, c_files: list[str]) -> None:
-    compiler = os.environ.get("CC", "gcc")
-    command = [compiler, *COMPILE_FLAGS, "-I", str(sources), *[str(sources / f) for f in c_files], "-o", str(binary), "-lm"]
-    try:
-        completed = subprocess.run(command, capture_output=True, text=True)
-    except FileNotFoundError:
-        raise ValueError(f"C compiler {compiler!r} not found: set CC or install gcc") from None
-    if completed.returncode != 0:
-        raise ValueError(f"compiling the plant FMU failed ({' '.join(command)}):\n{completed.stderr}")
-
-
 def build_plant_fmu(model, out_path, *, name: str | None = None) -> Path:
     """Generate, compile and zip a plant FMU (FMI 2.0 Model Exchange + Co-Simulation); returns its path.
 
@@ -76,27 +61,19 @@ def build_plant_fmu(model, out_path, *, name: str | None = None) -> Path:
         root = Path(tmp)
         sources = root / "sources"
         sources.mkdir()
-        package = resources.files("shapefmu.fmi.native") / "c"
-        for file in WRAPPER_SOURCES + WRAPPER_HEADERS:
-            (sources / file).write_bytes((package / file).read_bytes())
+        copy_c_files(sources, WRAPPER_SOURCES + WRAPPER_HEADERS)
         # The GUID hashes the sources, which include the GUID: generate with a placeholder first.
         generated = write_sources(part, "", sources)
         c_files = [*WRAPPER_SOURCES, *generated]
         guid = description.guid_of(part, {f: (sources / f).read_text(encoding="utf-8") for f in c_files})
         write_sources(part, guid, sources)
-        (sources / "buildDescription.xml").write_text(description.build_description(part, tuple(c_files)), encoding="utf-8")
-        binaries = root / "binaries" / fmpy.platform
-        binaries.mkdir(parents=True)
-        _compile(sources, binaries / f"{identifier}{fmpy.sharedLibraryExtension}", c_files)
+        (sources / "buildDescription.xml").write_text(build_description(identifier, c_files), encoding="utf-8")
+        note = build_binaries(root, identifier, c_files, f"plant {part.name}")
+        if note:
+            print(note, file=sys.stderr)
         (root / "modelDescription.xml").write_text(description.model_description(part, guid, tuple(c_files)),
                                                    encoding="utf-8")
-        out_path.parent.mkdir(parents=True, exist_ok=True)
-        partial = out_path.with_name(out_path.name + ".partial")
-        with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as archive:
-            for path in sorted(root.rglob("*")):
-                if path.is_file():
-                    archive.write(path, path.relative_to(root).as_posix())
-        shutil.move(partial, out_path)
+        zip_fmu(root, out_path)
     return out_path
 
 

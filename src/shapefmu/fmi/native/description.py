@@ -13,6 +13,7 @@ import uuid
 from xml.sax.saxutils import quoteattr
 
 from shapefmu import __version__
+from shapefmu.fmi.native.compile import build_description as compile_build_description
 from shapefmu.fmi.native.model_part import ModelPart
 
 LOG_CATEGORIES = ("logStatusError", "logAll")
@@ -133,13 +134,5 @@ def model_description(part: ModelPart, guid: str, source_files: tuple[str, ...] 
 
 
 def build_description(part: ModelPart, source_files: tuple[str, ...]) -> str:
-    files = "\n".join(f'      <SourceFile name="{name}"/>' for name in source_files)
-    return f"""<?xml version="1.0" encoding="UTF-8"?>
-<fmiBuildDescription fmiVersion="3.0">
-  <BuildConfiguration modelIdentifier="{model_identifier(part)}">
-    <SourceFileSet language="C99">
-{files}
-    </SourceFileSet>
-  </BuildConfiguration>
-</fmiBuildDescription>
-"""
+    """sources/buildDescription.xml of a plant FMU (``compile.build_description``)."""
+    return compile_build_description(model_identifier(part), source_files)
