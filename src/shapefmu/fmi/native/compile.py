@@ -8,15 +8,22 @@ as ``$MINGW_CC`` or ``x86_64-w64-mingw32-gcc``), so that one ``.fmu`` serves Lin
 hosts. Where the cross compiler is absent the FMU is built for linux64 only and ``build_binaries``
 says so in the note it returns; its ``sources/`` let any Windows tool compile it later.
 
+Object files are cached in the temporary directory by the hash of the compiler, its flags and the
+sources, so the generic layer is compiled once per machine rather than once per FMU.
+
 The DLL links libgcc statically and needs only the Windows C runtime (msvcrt.dll), which every
 Windows has.
 """
 
 from __future__ import annotations
 
+import getpass
+import hashlib
 import os
 import shutil
 import subprocess
+import tempfile
+import threading
 import zipfile
 from dataclasses import dataclass
 from importlib import resources
@@ -58,17 +65,39 @@ def copy_c_files(sources: Path, names) -> None:
         (sources / name).write_bytes((package / name).read_bytes())
 
 
-def compile_binary(platform: Platform, sources: Path, c_files, binary: Path, what: str) -> None:
-    """Compile ``c_files`` (in ``sources``) into the shared library ``binary``."""
-    binary.parent.mkdir(parents=True, exist_ok=True)
-    command = [platform.compiler, *platform.flags, "-I", str(sources), *[str(sources / f) for f in c_files],
-               "-o", str(binary), "-lm"]
+def _run(command: list[str], compiler: str, what: str, platform: str) -> None:
     try:
         completed = subprocess.run(command, capture_output=True, text=True)
     except FileNotFoundError:
-        raise ValueError(f"C compiler {platform.compiler!r} not found: set CC or install gcc") from None
+        raise ValueError(f"C compiler {compiler!r} not found: set CC or install gcc") from None
     if completed.returncode != 0:
-        raise ValueError(f"compiling the {what} FMU for {platform.name} failed ({' '.join(command)}):\n{completed.stderr}")
+        raise ValueError(f"compiling the {what} FMU for {platform} failed ({' '.join(command)}):\n{completed.stderr}")
+
+
+def _object(platform: Platform, sources: Path, c_file: str, headers: bytes, what: str) -> Path:
+    """The object file of ``c_file``, from a cache keyed by the compiler, its flags and the bytes of
+    the file and of every header beside it: the generic layer is compiled once, not per FMU."""
+    digest = hashlib.sha256(repr((platform.compiler, platform.flags)).encode() + headers)
+    digest.update((sources / c_file).read_bytes())
+    cache = Path(tempfile.gettempdir()) / f"shapefmu-objects-{getpass.getuser()}"
+    cache.mkdir(exist_ok=True)
+    target = cache / f"{digest.hexdigest()}.o"
+    if not target.is_file():
+        partial = cache / f"{digest.hexdigest()}.{os.getpid()}.{threading.get_ident()}.partial.o"
+        flags = [f for f in platform.flags if f not in ("-shared", "-s")]
+        _run([platform.compiler, *flags, "-c", "-I", str(sources), str(sources / c_file), "-o", str(partial)],
+             platform.compiler, what, platform.name)
+        os.replace(partial, target)
+    return target
+
+
+def compile_binary(platform: Platform, sources: Path, c_files, binary: Path, what: str) -> None:
+    """Compile ``c_files`` (in ``sources``) into the shared library ``binary``."""
+    binary.parent.mkdir(parents=True, exist_ok=True)
+    headers = b"".join(path.name.encode() + path.read_bytes() for path in sorted(sources.glob("*.h")))
+    objects = [str(_object(platform, sources, f, headers, what)) for f in c_files]
+    _run([platform.compiler, *platform.flags, *objects, "-o", str(binary), "-lm"], platform.compiler, what,
+         platform.name)
 
 
 def build_binaries(root: Path, identifier: str, c_files, what: str) -> str:

@@ -18,6 +18,8 @@
 #include "shaper_designs.h"
 
 #define PI 3.14159265358979323846
+/* f[i], zeta[i] pairs a Shaper may declare. */
+#define MAX_MODES 16
 
 typedef struct {
     SampledFir fir;
@@ -27,7 +29,8 @@ typedef struct {
     double *taps;            /* the dense taps of a re-grid, length + 2 */
     double *scratch;         /* 2 * capacity doubles for the closed-form design */
     /* value references by meaning (first entry of an array); SIZE_MAX if absent */
-    size_t u, y, period, rest, kind, order, modes, time, amplitude, tap, frequency, damping;
+    size_t u, y, period, rest, kind, order, modes, time, amplitude, tap;
+    size_t frequency[MAX_MODES], damping[MAX_MODES]; /* f[i], zeta[i] are interleaved */
 } Sampled;
 
 static Sampled *sampled_of(Fmi2Instance *inst) { return (Sampled *)inst->model; }
@@ -128,10 +131,10 @@ static fmi2Status design(Fmi2Instance *inst, const char *function) {
     const char *kind = fmi2_string(inst, s->kind);
     const int n = inst->integers[s->order - sampled_model.n_real];
     const int n_modes = inst->integers[s->modes - sampled_model.n_real];
-    double omega[16], zeta[16];
+    double omega[MAX_MODES], zeta[MAX_MODES];
     for (int j = 0; j < n_modes; j++) {
-        omega[j] = 2.0 * PI * inst->reals[s->frequency + j];
-        zeta[j] = inst->reals[s->damping + j];
+        omega[j] = 2.0 * PI * inst->reals[s->frequency[j]];
+        zeta[j] = inst->reals[s->damping[j]];
     }
     double *times = inst->reals + s->time, *amplitudes = inst->reals + s->amplitude;
     const int count = design_closed_form(closed_form_kind(kind), n, n_modes, omega, zeta, times, amplitudes,
@@ -361,7 +364,12 @@ int model_instantiate(Fmi2Instance *inst) {
     s->period = first_of(MEANS_PERIOD), s->kind = first_of(MEANS_KIND), s->order = first_of(MEANS_ORDER);
     s->modes = first_of(MEANS_MODES), s->time = first_of(MEANS_IMPULSE_TIME);
     s->amplitude = first_of(MEANS_IMPULSE_AMPLITUDE), s->tap = first_of(MEANS_TAP);
-    s->frequency = first_of(MEANS_FREQUENCY), s->damping = first_of(MEANS_DAMPING);
+    for (size_t vr = 0; vr < n_variables(); vr++) {
+        const SampledVariable *v = variable(vr);
+        if (v->index >= MAX_MODES) continue;
+        if (v->meaning == MEANS_FREQUENCY) s->frequency[v->index] = vr;
+        if (v->meaning == MEANS_DAMPING) s->damping[v->index] = vr;
+    }
     if (sampled_model.closed_form) {
         s->scratch = fmi2_allocate(inst, 2 * (size_t)sampled_model.capacity, sizeof(double));
         if (s->scratch == NULL) return -1;
