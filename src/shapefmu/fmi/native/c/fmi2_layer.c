@@ -200,10 +200,13 @@ static const char *const TYPE_NAMES[] = {"Real", "Integer", "Boolean", "String"}
 
 /* The value references [first, first + count) of a type. */
 static void type_range(const Fmi2Instance *inst, Fmi2Type type, size_t *first, size_t *count) {
-    const size_t counts[] = {inst->info.n_real, inst->info.n_integer, inst->info.n_boolean, inst->info.n_string};
-    *first = 0;
-    for (int t = 0; t < (int)type; t++) *first += counts[t];
-    *count = counts[type];
+    const Fmi2ModelInfo *info = &inst->info;
+    switch (type) {
+    case FMI2_REAL: *first = 0, *count = info->n_real; return;
+    case FMI2_INTEGER: *first = info->n_real, *count = info->n_integer; return;
+    case FMI2_BOOLEAN: *first = info->n_real + info->n_integer, *count = info->n_boolean; return;
+    default: *first = info->n_real + info->n_integer + info->n_boolean, *count = info->n_string; return;
+    }
 }
 
 /* Every vr is a variable of type; logs the first that is not. */

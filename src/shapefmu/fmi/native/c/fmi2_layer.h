@@ -16,7 +16,7 @@
     if (inst == NULL) return fmi2Error;                                                             \
     if (!(inst->mode & (allowed)))                                                                  \
         return fmi2_fail(inst, "%s: not allowed in %s", function, fmi2_mode_name(inst->mode));      \
-    fmi2_debug(inst, "%s", function)
+    if (inst->logging_on) fmi2_debug(inst, "%s", function)
 
 #define REQUIRE_ARRAY(pointer, count, function)                                                     \
     if ((count) > 0 && (pointer) == NULL)                                                           \

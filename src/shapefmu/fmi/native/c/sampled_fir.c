@@ -17,7 +17,7 @@
 
 /* ---------------------------------------------------------------- clock */
 
-static double instant(const SampledFir *fir, long long k) { return fir->t0 + (double)k * fir->ts; }
+static inline double instant(const SampledFir *fir, long long k) { return fir->t0 + (double)k * fir->ts; }
 
 /* K(tau): the index of the newest sample reached at tau, as a double (a step may span many). */
 static double newest_sample(const SampledFir *fir, double tau) {
@@ -28,27 +28,55 @@ static double newest_sample(const SampledFir *fir, double tau) {
     return k;
 }
 
-static int on_grid(const SampledFir *fir, double tau, long long k) {
-    return fabs(tau - instant(fir, k)) <= SAMPLE_TOLERANCE * fir->ts;
+/* Sample k becomes the current one: its instant and the next two's, computed once. */
+static inline void set_sample(SampledFir *fir, long long k) {
+    if (k == fir->k + 1) { /* the usual step: the instants move up by one */
+        fir->s_k = fir->s_next;
+        fir->s_next = fir->s_after;
+    } else {
+        fir->s_k = instant(fir, k);
+        fir->s_next = instant(fir, k + 1);
+    }
+    fir->s_after = instant(fir, k + 2);
+    fir->k = k;
+}
+
+static inline long long fir_reached(const SampledFir *fir, double tau) {
+    /* A step of at most one sample, the common case, needs no division: the K with
+     * s_K <= tau + delta < s_{K+1} is k or k + 1 (the s computed as everywhere, t0 + K Ts). */
+    const double limit = tau + fir->delta;
+    if (fir->s_next > limit) {
+        if (fir->s_k <= limit) return fir->k;
+    } else if (fir->s_after > limit) {
+        return fir->k + 1;
+    }
+    return (long long)newest_sample(fir, tau);
+}
+
+static inline int on_grid(const SampledFir *fir, double tau, long long k) {
+    const double s = k == fir->k ? fir->s_k : k == fir->k + 1 ? fir->s_next : instant(fir, k);
+    return fabs(tau - s) <= fir->delta;
 }
 
 /* ---------------------------------------------------------------- filter */
 
-static void commit(SampledFir *fir, double u) {
+static inline void commit(SampledFir *fir, double u) {
     const long length = fir->length;
     fir->pos = fir->pos ? fir->pos - 1 : length - 1;
     double *history = fir->line + fir->pos;
     history[0] = history[length] = u;
     /* tail delay d reads u[k + 1 - d]: the sample committed d - 1 samples ago */
+    const long *offset = fir->tail_offset;
+    const double *weight = fir->tail_weight;
     double r = 0.0;
-    for (int i = 0; i < fir->n_tail; i++) r += fir->tail_weight[i] * history[fir->tail_delay[i] - 1];
+    for (int i = 0; i < fir->n_tail; i++) r += weight[i] * history[offset[i]];
     fir->r = r;
 }
 
 void fir_recompute(SampledFir *fir) {
     const double *history = fir->line + fir->pos;
     double r = 0.0;
-    for (int i = 0; i < fir->n_tail; i++) r += fir->tail_weight[i] * history[fir->tail_delay[i] - 1];
+    for (int i = 0; i < fir->n_tail; i++) r += fir->tail_weight[i] * history[fir->tail_offset[i]];
     fir->r = r;
 }
 
@@ -66,22 +94,19 @@ void fir_start(SampledFir *fir, double u0, double t0, double ts) {
     fir->r = u0 * (sum + compensation);
     fir->t0 = t0;
     fir->ts = ts;
-    fir->k = 0;
+    fir->delta = SAMPLE_TOLERANCE * ts;
+    fir->k = -2; /* no cached instants yet */
+    set_sample(fir, 0);
     fir->latched = 0;
     fir->v = 0.0;
-}
-
-double fir_output(const SampledFir *fir, double u) {
-    return fir->w0 * (fir->latched ? fir->v : u) + fir->r;
 }
 
 double fir_samples_in_step(const SampledFir *fir, double t, double h) {
     return newest_sample(fir, t + h) - (double)fir->k;
 }
 
-void fir_step(SampledFir *fir, double t, double h, double u) {
-    const double end = t + h;
-    const long long k_end = (long long)newest_sample(fir, end);
+void fir_step(SampledFir *fir, double end, double u) {
+    const long long k_end = fir_reached(fir, end);
     if (k_end == fir->k) {
         /* Nothing sampled; a step that leaves the grid fixes sample k's input. */
         if (!fir->latched && !on_grid(fir, end, fir->k)) {
@@ -92,8 +117,9 @@ void fir_step(SampledFir *fir, double t, double h, double u) {
     }
     commit(fir, fir->latched ? fir->v : u);
     for (long long j = fir->k + 1; j < k_end; j++) commit(fir, u);
-    fir->k = k_end;
-    fir->latched = !on_grid(fir, end, k_end);
+    const int grid = on_grid(fir, end, k_end);
+    set_sample(fir, k_end);
+    fir->latched = !grid;
     fir->v = fir->latched ? u : 0.0;
 }
 
@@ -124,13 +150,15 @@ int fir_restore(SampledFir *fir, const unsigned char *bytes, size_t size) {
     if (s.length != fir->length || s.pos < 0 || s.pos >= s.length || s.k < 0 || (s.latched != 0 && s.latched != 1)
         || !(s.ts > 0.0))
         return -1;
-    fir->k = s.k;
     fir->pos = (long)s.pos;
     fir->latched = (int)s.latched;
     fir->v = s.v;
     fir->r = s.r;
     fir->t0 = s.t0;
     fir->ts = s.ts;
+    fir->delta = SAMPLE_TOLERANCE * s.ts;
+    fir->k = s.k - 2; /* no cached instants yet */
+    set_sample(fir, s.k);
     memcpy(fir->line, bytes + sizeof s, 2 * (size_t)fir->length * sizeof(double));
     return 0;
 }

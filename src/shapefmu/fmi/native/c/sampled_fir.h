@@ -19,10 +19,11 @@
 #define MAX_DELAY_SAMPLES 10000000L
 
 typedef struct {
-    /* the taps: w0 at delay 0, then n_tail non-zero taps at delays >= 1, increasing */
+    /* the taps: w0 at delay 0, then n_tail non-zero taps at delays d >= 1, increasing, each
+     * stored with its offset d - 1 into the delay line */
     double w0;
     int n_tail;
-    long *tail_delay;
+    long *tail_offset;
     double *tail_weight;
     /* delay line of the committed inputs, twice over so that a read never wraps:
      * u[k - j] = line[pos + j] for j < length */
@@ -31,10 +32,11 @@ typedef struct {
     double *line;
     double r;
     /* the sample clock: k the current sample, latched when its input is fixed (v) */
-    double t0, ts;
+    double t0, ts, delta;
     long long k;
     int latched;
     double v;
+    double s_k, s_next, s_after;   /* t0 + (k, k + 1, k + 2) Ts, kept with k */
 } SampledFir;
 
 /* Bytes of the FIR's state (clock, history part, delay line) and their copy / restore. */
@@ -48,10 +50,13 @@ void fir_start(SampledFir *fir, double u0, double t0, double ts);
 /* r from the delay line with the current taps (after the taps changed). */
 void fir_recompute(SampledFir *fir);
 /* y at the current communication point for input u. */
-double fir_output(const SampledFir *fir, double u);
-/* The samples a step from t to t + h reaches: K(t + h) - k (>= 0). */
+static inline double fir_output(const SampledFir *fir, double u) {
+    return fir->w0 * (fir->latched ? fir->v : u) + fir->r;
+}
+/* The samples a step from t to t + h reaches, K(t + h) - k, as a double (a step may span many). */
 double fir_samples_in_step(const SampledFir *fir, double t, double h);
-/* Advance from t to t + h with input u held over the step (the spec's steps 2-4). */
-void fir_step(SampledFir *fir, double t, double h, double u);
+/* Advance to end = t + h with input u held over the step (the spec's steps 2-4); the step must
+ * reach a sample index that fits a long long (fir_samples_in_step checks the count first). */
+void fir_step(SampledFir *fir, double end, double u);
 
 #endif

@@ -99,16 +99,16 @@ static void regrid(Fmi2Instance *inst) {
     fir->n_tail = 0;
     for (long d = 1; d <= length; d++)
         if (taps[d] != 0.0) {
-            fir->tail_delay[fir->n_tail] = d;
+            fir->tail_offset[fir->n_tail] = d - 1;
             fir->tail_weight[fir->n_tail++] = taps[d];
         }
 }
 
 static void free_line(Fmi2Instance *inst) {
     Sampled *s = sampled_of(inst);
-    void *buffers[] = {s->fir.line, s->fir.tail_delay, s->fir.tail_weight, s->taps};
+    void *buffers[] = {s->fir.line, s->fir.tail_offset, s->fir.tail_weight, s->taps};
     for (size_t i = 0; i < sizeof buffers / sizeof buffers[0]; i++) fmi2_release(inst, buffers[i]);
-    s->fir.line = NULL, s->fir.tail_delay = NULL, s->fir.tail_weight = NULL, s->taps = NULL;
+    s->fir.line = NULL, s->fir.tail_offset = NULL, s->fir.tail_weight = NULL, s->taps = NULL;
     s->fir.length = 0;
 }
 
@@ -118,10 +118,10 @@ static int allocate_line(Fmi2Instance *inst, long length) {
     free_line(inst);
     s->fir.length = length;
     s->fir.line = fmi2_allocate(inst, 2 * (size_t)length, sizeof(double));
-    s->fir.tail_delay = fmi2_allocate(inst, (size_t)length, sizeof(long));
+    s->fir.tail_offset = fmi2_allocate(inst, (size_t)length, sizeof(long));
     s->fir.tail_weight = fmi2_allocate(inst, (size_t)length, sizeof(double));
     s->taps = fmi2_allocate(inst, (size_t)length + 2, sizeof(double));
-    return s->fir.line && s->fir.tail_delay && s->fir.tail_weight && s->taps ? 0 : -1;
+    return s->fir.line && s->fir.tail_offset && s->fir.tail_weight && s->taps ? 0 : -1;
 }
 
 /* ---------------------------------------------------------------- design */
@@ -174,11 +174,14 @@ fmi2Status model_update(Fmi2Instance *inst, const char *function) {
 
 fmi2Status model_do_step(Fmi2Instance *inst, double t, double h) {
     Sampled *s = sampled_of(inst);
-    const double samples = fir_samples_in_step(&s->fir, t, h);
-    if (samples > (double)MAX_SAMPLES_PER_STEP)
-        return fmi2_fail(inst, "fmi2DoStep: communication step h = %g s spans %.0f samples of Ts = %g s; at most %lld "
-                         "per step", h, samples, s->fir.ts, MAX_SAMPLES_PER_STEP);
-    fir_step(&s->fir, t, h, inst->reals[s->u]);
+    const double end = t + h;
+    if (end > s->fir.s_after) { /* more than one sample: count them first */
+        const double samples = fir_samples_in_step(&s->fir, t, h);
+        if (samples > (double)MAX_SAMPLES_PER_STEP)
+            return fmi2_fail(inst, "fmi2DoStep: communication step h = %g s spans %.0f samples of Ts = %g s; at most "
+                             "%lld per step", h, samples, s->fir.ts, MAX_SAMPLES_PER_STEP);
+    }
+    fir_step(&s->fir, end, inst->reals[s->u]);
     return fmi2OK;
 }
 
@@ -186,8 +189,8 @@ fmi2Status model_do_step(Fmi2Instance *inst, double t, double h) {
 
 static const SampledVariable *variable(size_t vr) { return &sampled_model.variables[vr]; }
 
-static fmi2Status keeps_build_value(Fmi2Instance *inst, size_t vr, int same, const char *given, const char *function) {
-    if (same) return fmi2OK;
+/* Refuses a value other than the build value; given is the value as the user wrote it. */
+static fmi2Status refuse_other_value(Fmi2Instance *inst, size_t vr, const char *given, const char *function) {
     const SampledVariable *v = variable(vr);
     char start[64];
     if (v->string_start != NULL) snprintf(start, sizeof start, "%s", v->string_start);
@@ -202,10 +205,23 @@ static fmi2Status real_range(Fmi2Instance *inst, const char *name, double value,
     return fmi2_fail(inst, "%s: %s must be %s, got %g", function, name, range, value);
 }
 
-fmi2Status model_check_real(Fmi2Instance *inst, size_t vr, double value, const char *function) {
-    const SampledVariable *v = variable(vr);
+static fmi2Status keeps_real(Fmi2Instance *inst, size_t vr, double value, int same, const char *function) {
+    if (same) return fmi2OK;
     char given[32];
     snprintf(given, sizeof given, "%.17g", value);
+    return refuse_other_value(inst, vr, given, function);
+}
+
+static fmi2Status keeps_integer(Fmi2Instance *inst, size_t vr, int value, int same, const char *function) {
+    if (same) return fmi2OK;
+    char given[32];
+    snprintf(given, sizeof given, "%d", value);
+    return refuse_other_value(inst, vr, given, function);
+}
+
+fmi2Status model_check_real(Fmi2Instance *inst, size_t vr, double value, const char *function) {
+    if (vr == sampled_of(inst)->u && isfinite(value)) return fmi2OK; /* the input, every step: first */
+    const SampledVariable *v = variable(vr);
     switch (v->meaning) {
     case MEANS_PERIOD: return real_range(inst, v->name, value, value > 0.0, "> 0", function);
     case MEANS_IMPULSE_TIME: {
@@ -223,33 +239,31 @@ fmi2Status model_check_real(Fmi2Instance *inst, size_t vr, double value, const c
         return real_range(inst, v->name, value, 1, "finite", function);
     case MEANS_FREQUENCY:
         if (real_range(inst, v->name, value, value > 0.0, "> 0", function) != fmi2OK) return fmi2Error;
-        return keeps_build_value(inst, vr, sampled_model.closed_form || value == v->start, given, function);
+        return keeps_real(inst, vr, value, sampled_model.closed_form || value == v->start, function);
     case MEANS_DAMPING:
         if (real_range(inst, v->name, value, value >= 0.0 && value < 1.0, "in [0, 1)", function) != fmi2OK)
             return fmi2Error;
-        return keeps_build_value(inst, vr, sampled_model.closed_form || value == v->start, given, function);
+        return keeps_real(inst, vr, value, sampled_model.closed_form || value == v->start, function);
     case MEANS_TOLERANCE:
         if (real_range(inst, v->name, value, value > 0.0 && value < 1.0, "in (0, 1)", function) != fmi2OK)
             return fmi2Error;
-        return keeps_build_value(inst, vr, sampled_model.closed_form || value == v->start, given, function);
-    case MEANS_BUILD_VALUE: return keeps_build_value(inst, vr, value == v->start, given, function);
+        return keeps_real(inst, vr, value, sampled_model.closed_form || value == v->start, function);
+    case MEANS_BUILD_VALUE: return keeps_real(inst, vr, value, value == v->start, function);
     default: return real_range(inst, v->name, value, 1, "finite", function);
     }
 }
 
 fmi2Status model_check_integer(Fmi2Instance *inst, size_t vr, int value, const char *function) {
     const SampledVariable *v = variable(vr);
-    char given[32];
-    snprintf(given, sizeof given, "%d", value);
     switch (v->meaning) {
     case MEANS_ORDER:
         if (value < 0 || value > 62) return fmi2_fail(inst, "%s: n must be an integer in [0, 62], got %d", function, value);
-        return keeps_build_value(inst, vr, sampled_model.closed_form || value == v->start, given, function);
+        return keeps_integer(inst, vr, value, sampled_model.closed_form || value == v->start, function);
     case MEANS_MODES:
         if (value < 1 || value > sampled_model.max_modes)
             return fmi2_fail(inst, "%s: n_modes must be in [1, %d], got %d", function, sampled_model.max_modes, value);
-        return keeps_build_value(inst, vr, sampled_model.closed_form || value == v->start, given, function);
-    default: return keeps_build_value(inst, vr, value == (int)v->start, given, function);
+        return keeps_integer(inst, vr, value, sampled_model.closed_form || value == v->start, function);
+    default: return keeps_integer(inst, vr, value, value == (int)v->start, function);
     }
 }
 
@@ -260,11 +274,13 @@ fmi2Status model_check_string(Fmi2Instance *inst, size_t vr, const char *value, 
         return fmi2_fail(inst, "%s: kind must be a kind this FMU designs in C (zv, zvd, zvdd, zv_dn, mzv), got %s; "
                          "other kinds are designed at build time: shapefmu build shaper --native --kind %s", function,
                          value, value);
-    return keeps_build_value(inst, vr, same || (v->meaning == MEANS_KIND && sampled_model.closed_form), value, function);
+    if (same || (v->meaning == MEANS_KIND && sampled_model.closed_form)) return fmi2OK;
+    return refuse_other_value(inst, vr, value, function);
 }
 
 void model_changed(Fmi2Instance *inst, size_t vr) {
     Sampled *s = sampled_of(inst);
+    if (vr == s->u) return; /* y follows u in model_update */
     switch (variable(vr)->meaning) {
     case MEANS_KIND: case MEANS_ORDER: case MEANS_MODES: case MEANS_FREQUENCY: case MEANS_DAMPING:
         s->design_changed = 1;
