@@ -3,8 +3,9 @@
  *
  * Usage: fmu_loop STEPS H FACTOR LIB GUID IN OUT [LIB2 GUID2 IN2 OUT2]
  *   one FMU:  per step set IN = sin-like command, doStep, get OUT
- *   two FMUs: per step set FMU 2's IN2 = FACTOR * (FMU 1's OUT read after the last step), doStep
- *             both, get OUT; every 100th step also get FMU 2's OUT2 (what a master records)
+ *   two FMUs: FMU 1's IN held at 1 (a step command); per step set FMU 2's IN2 = FACTOR * (FMU 1's
+ *             OUT read after the last step), doStep both, get OUT; every 100th step also get FMU 2's
+ *             OUT2 (what a master records)
  * Prints the seconds the loop took (clock_gettime, monotonic), then the last output read.
  */
 #define _POSIX_C_SOURCE 199309L
@@ -80,6 +81,8 @@ int main(int argc, char **argv) {
             CALL(a.get(a.c, &a.out, 1, &y));
         }
     } else {
+        const double command = 1.0;
+        CALL(a.set(a.c, &a.in, 1, &command));
         CALL(a.get(a.c, &a.out, 1, &y));
         for (k = 0; k < steps; k++) {
             const double t = (double)k * h, u = factor * y;
