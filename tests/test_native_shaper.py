@@ -58,28 +58,31 @@ def newest_sample(tau, ts):
     return k
 
 
-def spec_reference(taps, commands, steps, u0):
+def spec_reference(taps, commands, steps, u0, read="after_set"):
     """The spec's reference: u_k = the input in effect at s_k (set at the last communication point
     <= s_k), y_k = FIR(u)_k, read at tau: y_{K(tau)}, whose current sample takes the input in effect
-    at tau (a later point on the same sample may still change it: linearity adds w_0 times that)."""
+    at tau (a later point on the same sample may still change it: linearity adds w_0 times that).
+
+    ``read``: "after_set" reads at each communication point right after setting its command;
+    "after_step" at the end of each step, before the next command is set (as the hosts record)."""
     t, points = 0.0, []
     for h in steps:
         points.append(t)
         t += h
-    reached = [points[i] for i in range(len(points))]
+    ends = points[1:] + [t]
 
     def in_effect(k, upto):
         """Index of the last communication point <= s_k among points[0..upto]."""
         j = 0
-        while j + 1 <= upto and reached[j + 1] <= k * H + SAMPLE_TOLERANCE * H:
+        while j + 1 <= upto and points[j + 1] <= k * H + SAMPLE_TOLERANCE * H:
             j += 1
         return j
 
-    last = newest_sample(points[-1], H)
+    last = newest_sample(ends[-1], H)
     samples = np.array([commands[in_effect(k, len(points) - 1)] for k in range(last + 1)])
     y = fir(taps, samples, u0)
     out = []
-    for j, tau in enumerate(points):
+    for j, tau in enumerate(points if read == "after_set" else ends):
         k = newest_sample(tau, H)
         out.append(y[k] + taps[0] * (commands[in_effect(k, j)] - samples[k]))
     return np.array(out)
@@ -166,6 +169,36 @@ def test_outputs_identical_in_fmpy_libcosim_and_ecos(native_shapers, native_filt
         reference = run_fmpy(path, commands, H)
         for other in (run_libcosim(path, commands, H), run_ecos(path, commands, H)):
             np.testing.assert_allclose(other, reference, rtol=0, atol=1e-12)
+
+
+def test_steps_off_the_grid_give_the_spec_reference_in_fmpy_libcosim_and_ecos(native_shapers, quiet_libcosim):
+    path, starts = native_shapers[("simultaneous", 2)]
+    commands = command_signal(200)
+    h = 0.7 * H  # a whole number of nanoseconds (libcosim), on the grid every tenth step
+    expected = spec_reference(design_taps(starts), commands, np.full(len(commands), h), starts["u0"], "after_step")
+    for run in (run_fmpy, run_libcosim, run_ecos):
+        np.testing.assert_allclose(run(path, commands, h), expected, rtol=0, atol=1e-12, err_msg=run.__name__)
+
+
+def test_cli_builds_a_native_shaper_and_without_mingw_a_linux64_one_with_a_note(tmp_path, monkeypatch, capsys):
+    import zipfile
+
+    from shapefmu.cli import main
+    from shapefmu.fmi.native import compile as native_compile
+
+    out = tmp_path / "Native.fmu"
+    assert main(["build", "shaper", "--native", "--kind", "zvd", "--mode", "13:0.05", "--ts", "1e-3",
+                 "-o", str(out)]) == 0
+    assert "binaries/win64/Shaper.dll" in zipfile.ZipFile(out).namelist()
+    commands = np.array(command_signal(200))
+    values = shaper_starts("zvd", ONE_MODE)
+    expected = fir(design_taps({**values, "u0": 0.0}), commands, 0.0)
+    np.testing.assert_allclose(read_after_set(out, commands, np.full(commands.size, H)), expected, rtol=0, atol=1e-12)
+    monkeypatch.setattr(native_compile, "win64", lambda: None)
+    assert main(["build", "shape-filter", "--native", "--mode", "10", "--adjust-ts", "-o", str(out)]) == 0
+    names = zipfile.ZipFile(out).namelist()
+    assert "binaries/linux64/ShapeFilter.so" in names and not any("win64" in n for n in names)
+    assert "built for linux64 only" in capsys.readouterr().err
 
 
 def test_every_native_fmu_passes_validation_with_win64_and_linux64_binaries(native_shapers, native_filters):
