@@ -242,10 +242,10 @@ fmi2Status model_partial_derivative(Fmi2Instance *inst, size_t unknown, size_t k
 fmi2Status model_check_real(Fmi2Instance *inst, size_t vr, double value, const char *function) {
     int i = 0;
     if (role_of(vr, &i) != PARAMETER) {
+        if (isfinite(value)) return fmi2OK;
         const char *name = "?";
         model_variable(inst, FMI2_REAL, vr, &name);
-        if (!isfinite(value)) return fmi2_fail(inst, "%s: %s must be finite, got %g", function, name, value);
-        return fmi2OK;
+        return fmi2_fail(inst, "%s: %s must be finite, got %g", function, name, value);
     }
     const PlantParameter *parameter = &plant_model.parameters[i];
     const char *range = NULL;

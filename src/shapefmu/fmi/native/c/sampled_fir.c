@@ -106,7 +106,9 @@ double fir_samples_in_step(const SampledFir *fir, double t, double h) {
 }
 
 void fir_step(SampledFir *fir, double end, double u) {
-    const long long k_end = fir_reached(fir, end);
+    long long k_end = fir_reached(fir, end);
+    /* A host's time may lag the FMU's by the layer's tolerance: the clock never runs backwards. */
+    if (k_end < fir->k) k_end = fir->k;
     if (k_end == fir->k) {
         /* Nothing sampled; a step that leaves the grid fixes sample k's input. */
         if (!fir->latched && !on_grid(fir, end, fir->k)) {
