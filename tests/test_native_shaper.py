@@ -267,6 +267,20 @@ def test_a_step_over_more_than_ten_million_samples_is_an_error(native_shapers, c
     assert "spans 20000000 samples of Ts = 0.001 s; at most 10000000 per step" in errors_of(capfd)
 
 
+def test_delays_beyond_the_delay_line_are_refused_with_its_limit(native_shapers, capfd):
+    path, _ = native_shapers[("zvd", 2)]
+    slave, vr = configured(path, {"Ts": 1e-9})  # 0.1 s of impulses at 1 ns: 1e8 samples
+    with pytest.raises(FMICallException):
+        slave.exitInitializationMode()
+    slave.freeInstance()
+    assert "samples of Ts = 1e-09 s; at most 10000000 (the delay line)" in errors_of(capfd)
+    slave, vr = initialised(path)
+    with pytest.raises(FMICallException):
+        slave.setReal([vr["impulse_time[2]"]], [10.0])
+    slave.freeInstance()
+    assert "impulse_time[2] = 10 s lies beyond the delay line of" in errors_of(capfd)
+
+
 def test_tuned_impulses_apply_between_steps(native_shapers):
     path, starts = native_shapers[("zv", 2)]
     slave, vr = initialised(path, {"n_modes": 1})
