@@ -31,8 +31,8 @@ from shapefmu.runtime.window_filters import hanning_filter
 
 N = 20000
 H = 1e-4
-C_STEPS = 2_000_000
-REPEATS = 5
+C_STEPS = 1_000_000
+REPEATS = 9
 
 EMPTY_SLAVE = textwrap.dedent(
     '''

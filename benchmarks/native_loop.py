@@ -103,3 +103,7 @@ def c_loop_seconds(steps: int, h: float, fmus: list[tuple[Path, str, str]], fact
     completed = subprocess.run([str(_program()), str(steps), repr(h), repr(factor), *arguments],
                                capture_output=True, text=True, check=True)
     return float(completed.stdout.split()[0])
+
+
+if __name__ == "__main__":  # `make bench` runs every script here: this one is a helper of two others
+    print("helper of fmu_step.py and cosim.py (the hand-written C loop and the empty native FMU); nothing to run")

@@ -106,6 +106,16 @@ double fir_samples_in_step(const SampledFir *fir, double t, double h) {
 }
 
 void fir_step(SampledFir *fir, double end, double u) {
+    if (!fir->latched && fir->s_next <= end + fir->delta && fir->s_after > end + fir->delta) {
+        /* The usual step: from sample k on the grid to exactly the next one, which it reaches. */
+        commit(fir, u);
+        set_sample(fir, fir->k + 1);
+        if (fabs(end - fir->s_k) > fir->delta) {
+            fir->latched = 1;
+            fir->v = u;
+        }
+        return;
+    }
     long long k_end = fir_reached(fir, end);
     /* A host's time may lag the FMU's by the layer's tolerance: the clock never runs backwards. */
     if (k_end < fir->k) k_end = fir->k;

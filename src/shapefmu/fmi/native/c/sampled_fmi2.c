@@ -25,12 +25,12 @@ typedef struct {
     SampledFir fir;
     int started;             /* initialisation has ended: the filter runs */
     int design_changed;      /* a closed-form design input changed since the last design */
-    long tail_capacity;
     double *taps;            /* the dense taps of a re-grid, length + 2 */
     double *scratch;         /* 2 * capacity doubles for the closed-form design */
     /* value references by meaning (first entry of an array); SIZE_MAX if absent */
     size_t u, y, period, rest, kind, order, modes, time, amplitude, tap;
     size_t frequency[MAX_MODES], damping[MAX_MODES]; /* f[i], zeta[i] are interleaved */
+    size_t n_variables;
 } Sampled;
 
 static Sampled *sampled_of(Fmi2Instance *inst) { return (Sampled *)inst->model; }
@@ -50,8 +50,7 @@ void model_describe(Fmi2ModelInfo *info) {
 
 Fmi2Role model_variable(const Fmi2Instance *inst, Fmi2Type type, size_t vr, const char **name) {
     (void)type;
-    (void)inst;
-    if (vr >= n_variables()) return FMI2_NO_VARIABLE;
+    if (vr >= ((const Sampled *)inst->model)->n_variables) return FMI2_NO_VARIABLE;
     *name = sampled_model.variables[vr].name;
     return sampled_model.variables[vr].role;
 }
@@ -376,6 +375,7 @@ int model_instantiate(Fmi2Instance *inst) {
     if (s == NULL) return -1;
     memset(s, 0, sizeof *s);
     inst->model = s;
+    s->n_variables = n_variables();
     s->u = first_of(MEANS_INPUT), s->y = first_of(MEANS_OUTPUT), s->rest = first_of(MEANS_REST);
     s->period = first_of(MEANS_PERIOD), s->kind = first_of(MEANS_KIND), s->order = first_of(MEANS_ORDER);
     s->modes = first_of(MEANS_MODES), s->time = first_of(MEANS_IMPULSE_TIME);
