@@ -5,13 +5,18 @@ fmpy loop, measured side by side in one run (10^5 macro steps of 1 us each):
   fmi2DoStep runs Python inside the FMU (about 2 us a step) in every host alike, which bounds every
   host's rate: ours, whose compiled loop adds little to it, cannot be 3x a host that adds less
   than twice that (ecos at its best adds about 1.4 us);
+* native shaper -> disk drive: the same system with the native C Shaper (``shapefmu build shaper
+  --native``): no Python in any FMU, so the hosts' own per-step overhead shows;
 * disk drive -> disk drive: two native plant FMUs, the first one's position driving the second
-  one's voltage. Each FMU step costs well under 0.1 us of C, so the hosts' own per-step overhead
-  shows.
+  one's voltage. Each FMU step costs well under 0.1 us of C.
+
+For the all-native systems, the limit no master can beat: a hand-written C loop calling the same
+two FMUs' functions directly (benchmarks/fmu_loop.c: set input, doStep, get output).
 
 Then a 10^6-step run of the plant alone with tracemalloc: memory stays flat apart from the results.
 
-Goals (issue 9): ours >= 3x libcosimpy and ecospy, >= 0.9x the hand-written loop.
+Goals (issue 9): ours >= 3x libcosimpy and ecospy, >= 0.9x the hand-written loop. Goals for the
+native shaper -> disk drive system: ours >= 3x ecospy, >= 30x libcosimpy, >= 0.8 of the C loop.
 """
 
 from __future__ import annotations
@@ -25,10 +30,12 @@ from pathlib import Path
 
 from fmpy import extract, read_model_description
 from fmpy.fmi2 import FMU2Slave
+from native_loop import c_loop_seconds
 
 from shapefmu.cosim import Master
 from shapefmu.fmi import build_fmu
 from shapefmu.fmi.native import build_plant_fmu
+from shapefmu.fmi.native.sampled import build_native_fmu
 from shapefmu.fmi.ssp import PARAMETER_SET, System
 
 STEP = 1e-6
@@ -40,6 +47,13 @@ def shaped_system(folder: Path) -> System:
     shaper = build_fmu("Shaper", folder / "Shaper.fmu")
     plant = build_plant_fmu("models/disk_drive.toml", folder / "DiskDrive.fmu")
     return (System("bench").add("source", shaper, SHAPER).add("plant", plant)
+            .connect("source.y", "plant.voltage", factor=11.0))
+
+
+def native_shaper_system(folder: Path) -> System:
+    """The shaped system with the native C Shaper, built with the same design (and u = 1 baked in)."""
+    shaper = build_native_fmu("Shaper", folder / "NativeShaper.fmu", **SHAPER)
+    return (System("native_shaper").add("source", shaper, SHAPER).add("plant", folder / "DiskDrive.fmu")
             .connect("source.y", "plant.voltage", factor=11.0))
 
 
@@ -150,8 +164,27 @@ def memory(folder: Path) -> tuple[int, int]:
     return long - short, elapsed
 
 
-HOSTS = ("shapefmu master (jacobi)", "shapefmu master (gauss-seidel)", "libcosimpy", "ecospy", "hand-written fmpy loop")
-GOALS = (("libcosimpy", 3.0), ("ecospy", 3.0), ("hand-written fmpy loop", 0.9))
+def c_loop(sys_: System) -> float:
+    """fmu_loop.c over the system's two FMUs (source -> plant), both native; NaN for a pythonfmu one."""
+    (connection,) = sys_.connections
+    source, plant = sys_.components["source"].fmu, sys_.components["plant"].fmu
+    if read_model_description(str(source)).generationTool.endswith("export library)"):
+        return float("nan")
+    return c_loop_seconds(STEPS, STEP, [(source, "voltage" if "voltage" in _names(source) else "u",
+                                         connection.start_connector), (plant, "voltage", "position")],
+                          factor=connection.factor)
+
+
+def _names(fmu) -> set[str]:
+    return {v.name for v in read_model_description(str(fmu)).modelVariables}
+
+
+HOSTS = ("shapefmu master (jacobi)", "shapefmu master (gauss-seidel)", "libcosimpy", "ecospy", "hand-written fmpy loop",
+         "hand-written C loop")
+GOALS = {"shaper -> disk drive": (("libcosimpy", 3.0), ("ecospy", 3.0), ("hand-written fmpy loop", 0.9)),
+         "native shaper -> disk drive": (("libcosimpy", 30.0), ("ecospy", 3.0), ("hand-written C loop", 0.8)),
+         "disk drive -> disk drive": (("libcosimpy", 3.0), ("ecospy", 3.0), ("hand-written fmpy loop", 0.9),
+                                      ("hand-written C loop", None))}
 
 
 REPEATS = 3
@@ -161,7 +194,7 @@ def rates_of(sys_: System, ssp: Path) -> dict[str, float]:
     """Each host's best of REPEATS runs, the hosts taking turns, so that a burst of load from
     other processes on a shared machine (or ecos's thread scheduling) does not decide a ratio."""
     runs = (lambda: ours(ssp, "jacobi"), lambda: ours(ssp, "gauss-seidel"), lambda: libcosim(ssp),
-            lambda: ecos(ssp), lambda: hand_written(sys_))
+            lambda: ecos(ssp), lambda: hand_written(sys_), lambda: c_loop(sys_))
     best = [min(times) for times in zip(*([run() for run in runs] for _ in range(REPEATS)))]
     return {name: STEPS / seconds for name, seconds in zip(HOSTS, best)}
 
@@ -169,20 +202,31 @@ def rates_of(sys_: System, ssp: Path) -> dict[str, float]:
 def main() -> int:
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
-        systems = {"shaper -> disk drive": shaped_system(folder), "disk drive -> disk drive": native_system(folder)}
+        systems = {"shaper -> disk drive": shaped_system(folder),
+                   "native shaper -> disk drive": native_shaper_system(folder),
+                   "disk drive -> disk drive": native_system(folder)}
         rates = {name: rates_of(sys_, sys_.write_ssp(folder / f"{sys_.name}.ssp")) for name, sys_ in systems.items()}
         names = list(systems)
         print(f"steps per second, {STEPS:,} macro steps of {STEP:g} s, best of {REPEATS}, measured side by side")
-        print(f"  {'host':32s}" + "".join(f"{name:>26s}" for name in names))
+        print(f"  {'host':32s}" + "".join(f"{name:>30s}" for name in names))
         for host in HOSTS:
-            print(f"  {host:32s}" + "".join(f"{rates[name][host]:26,.0f}" for name in names))
-        for peer, goal in GOALS:
+            print(f"  {host:32s}" + "".join(f"{rates[name][host]:30,.0f}" if rates[name][host] == rates[name][host]
+                                            else f"{'n/a (Python inside)':>30s}" for name in names))
+        peers = dict.fromkeys(peer for goals in GOALS.values() for peer, _ in goals)
+        for peer in peers:
             cells = []
             for name in names:
+                goal = dict(GOALS[name]).get(peer)
                 best = max(rates[name][HOSTS[0]], rates[name][HOSTS[1]])
                 ratio = best / rates[name][peer]
-                cells.append(f"{ratio:6.2f}x {'met' if ratio >= goal else 'NOT met':>8s}")
-            print(f"  ours / {peer:24s}" + "".join(f"{cell:>26s}" for cell in cells) + f"   (goal >= {goal}x)")
+                if peer not in dict(GOALS[name]) or ratio != ratio:
+                    cell = ""
+                elif goal is None:  # measured, no goal set
+                    cell = f"{ratio:6.2f}x"
+                else:
+                    cell = f"{ratio:6.2f}x {'met' if ratio >= goal else 'NOT met':>7s} (>= {goal:g})"
+                cells.append(cell)
+            print(f"  ours / {peer:24s}" + "".join(f"{cell:>30s}" for cell in cells))
         growth, elapsed = memory(folder)
         print(f"plant alone, 10^6 steps in {elapsed:.2f} s: tracemalloc peak grows by {growth} bytes "
               f"over the 10^5-step run (results: 11 rows)")

@@ -1,6 +1,11 @@
 """Microseconds per fmi2DoStep through fmpy: an empty pythonfmu FMU (the floor), our FMUs, and the
 same runtime kernel called directly in Python. Goal: the Shaper FMU within 2x of the floor.
 
+Then the native C Shaper and ShapeFilter (``shapefmu build ... --native``) beside an empty native
+FMU (the generic FMI 2.0 layer with a model part that does nothing, their floor), each stepped by
+the hand-written C loop of benchmarks/fmu_loop.c (set u, doStep, get y: nanoseconds per step, the
+FMU's own cost) and through fmpy. Goal: the native Shaper's step <= 1.5x the empty native FMU's.
+
 Each FMU is stepped N times with fmpy's low-level API (setReal u, doStep, getReal y: what a master
 does per step); the kernel is StreamingShaper.step on the same ZVD design and on the ShapeFilter's
 Hanning taps (400 of them: its cost grows with the taps, the FMU's overhead does not).
@@ -16,13 +21,18 @@ from fmpy import extract, read_model_description
 from fmpy.fmi2 import FMU2Slave
 from pythonfmu import FmuBuilder
 
+from native_loop import build_empty_native, c_loop_seconds
+
 from shapefmu.fmi import build_fmu
+from shapefmu.fmi.native.sampled import build_native_fmu
 from shapefmu.runtime.impulse_formulas import zv_dn
 from shapefmu.runtime.shaper_filter import StreamingShaper
 from shapefmu.runtime.window_filters import hanning_filter
 
 N = 20000
 H = 1e-4
+C_STEPS = 1_000_000
+REPEATS = 9
 
 EMPTY_SLAVE = textwrap.dedent(
     '''
@@ -89,6 +99,31 @@ def main():
         print(f"{name:34s} {value:8.2f} us/step   {value / floor:5.2f} x floor{goal}")
     print(f"{'StreamingShaper.step directly':34s} {kernel:8.2f} us/step   {kernel / floor:5.2f} x floor")
     print(f"{'  same on the Hanning n=2 taps':34s} {filter_kernel:8.2f} us/step   {filter_kernel / floor:5.2f} x floor")
+    native()
+
+
+def native():
+    """The native FMUs: C loop (best of REPEATS, ns/step) and fmpy (us/step)."""
+    with tempfile.TemporaryDirectory() as temp:
+        temp = Path(temp)
+        fmus = {
+            "empty native FMU (floor)": build_empty_native(temp / "Empty.fmu"),
+            "native Shaper (ZVD, 100 Hz)": build_native_fmu("Shaper", temp / "NativeShaper.fmu", kind="zvd",
+                                                            **{"f[1]": 100.0, "zeta[1]": 0.02, "Ts": H}),
+            "native ShapeFilter (Hanning n=2)": build_native_fmu("ShapeFilter", temp / "NativeFilter.fmu",
+                                                                 kind="hanning", f=100.0, order=2, Ts=H),
+        }
+        # The FMUs take turns, so that a burst of load on a shared machine does not decide a ratio.
+        runs = [{name: c_loop_seconds(C_STEPS, H, [(path, "u", "y")]) for name, path in fmus.items()}
+                for _ in range(REPEATS)]
+        loop = {name: min(run[name] for run in runs) / C_STEPS * 1e9 for name in fmus}
+        through_fmpy = {name: per_step_fmu(path) for name, path in fmus.items()}
+    floor = loop["empty native FMU (floor)"]
+    print(f"native FMUs, {C_STEPS:,} steps of the C loop (set u, doStep, get y), best of {REPEATS}; and via fmpy")
+    for name in fmus:
+        goal = "   (goal <= 1.5)" if name.startswith("native Shaper") else ""
+        print(f"{name:34s} {loop[name]:8.1f} ns/step   {loop[name] / floor:5.2f} x floor{goal}"
+              f"   {through_fmpy[name]:6.2f} us/step via fmpy")
 
 
 if __name__ == "__main__":

@@ -13,4 +13,5 @@ pytest_plugins = [
     "fixtures_fmi",     # pythonfmu FMUs: shapers, filters, profiles, EKF tuner, STOS, reference player
     "fixtures_plants",  # native C plant FMUs generated from models/
     "c_host",           # our C test host (hosts_c/fmi2_host.c), compiled once
+    "fixtures_native",  # native C Shaper and ShapeFilter FMUs
 ]

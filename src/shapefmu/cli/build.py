@@ -4,6 +4,8 @@
     shapefmu build shaper --kind simultaneous --mode 2000:0.01 --mode 3000:0.01 [--ts S] -o fmus/DiskDriveShaper.fmu
     shapefmu build reference solution.json [--interpolation hold|linear] -o fmus/TimeOptimal.fmu
     shapefmu build shape-filter --kind hanning --mode 10:0.05 --order 2 [--ts S] -o fmus/HanningFilter.fmu
+    shapefmu build shaper --native ...; shapefmu build shape-filter --native ...: the same FMU in C
+        (no Python on the host; linux64 and win64 binaries; shapefmu.fmi.native.sampled)
 
 Targets are registered in ``TARGETS``: a name -> (help, add_arguments(parser), build(args) -> [paths]).
 Another target (e.g. ``reference solution.json -o fmus/TimeOptimal.fmu``) is one more entry.
@@ -31,7 +33,22 @@ def _build_all(args):
     return [*build_all(args.out), *build_all_plants(args.models, args.out)]
 
 
+def _add_native(parser):
+    parser.add_argument("--native", action="store_true",
+                        help="a native C FMU (no Python on the host, linux64 + win64), designed at build time")
+
+
+def _builder(args):
+    """The pythonfmu builder, or the native one for --native."""
+    if args.native:
+        from shapefmu.fmi.native.sampled import build_native_fmu
+
+        return build_native_fmu
+    return build_fmu
+
+
 def _add_shaper(parser):
+    _add_native(parser)
     parser.add_argument("--kind", choices=KINDS, default="zvd", help="shaper design (default zvd)")
     parser.add_argument("--mode", type=parse_mode, action="append", required=True, metavar="HZ[:ZETA]",
                         help=f"mode frequency in Hz and damping ratio; up to {MAX_MODES}")
@@ -53,7 +70,7 @@ def _build_shaper(args):
         starts[f"zeta[{i}]"] = zeta
     starts["Ts"] = args.ts if args.ts is not None else 2.0 * math.pi / max(w for w, _ in args.mode) / 100.0
     check_sampling(args.mode, starts["Ts"], allow_aliasing=args.allow_aliasing)
-    return [build_fmu("Shaper", Path(args.out), **starts)]
+    return [_builder(args)("Shaper", Path(args.out), **starts)]
 
 
 def _add_reference(parser):
@@ -83,6 +100,7 @@ def _build_reference(args):
 def _add_shape_filter(parser):
     from shapefmu.fmi.python.slaves.shape_filter import BASES, KINDS as FILTER_KINDS
 
+    _add_native(parser)
     parser.add_argument("--kind", choices=FILTER_KINDS, default="hanning", help="filter design (default hanning)")
     parser.add_argument("--mode", type=parse_mode, required=True, metavar="HZ[:ZETA]",
                         help="mode frequency in Hz and damping ratio (damping: window filters only)")
@@ -104,7 +122,7 @@ def _build_shape_filter(args):
     given = {"order": args.order, "Ts": args.ts, "c": args.c, "base": args.base, "delta_f": args.delta_f,
              "null": args.null, "move_time": args.move_time}
     starts.update({name: value for name, value in given.items() if value is not None})
-    return [build_fmu("ShapeFilter", Path(args.out), **starts)]
+    return [_builder(args)("ShapeFilter", Path(args.out), **starts)]
 
 
 TARGETS = {

@@ -1,4 +1,5 @@
-"""Native C FMUs: the generic FMI 2.0 layer (``c/``) and the plant-FMU generator.
+"""Native C FMUs: the generic FMI 2.0 layer (``c/``), the plant-FMU generator and the native
+Shaper and ShapeFilter FMUs (``sampled.build_native_fmu``, see that module).
 
 It may import the design layer (``shapefmu.plants``) and CasADi for code generation; the C it
 emits and compiles needs nothing but a C compiler. The generator writes FMI 2.0 Model Exchange +
@@ -15,11 +16,15 @@ derivatives from the Jacobian) and Co-Simulation (exact zero-order-hold step for
 the matrix exponential computed in C when the step size or a parameter changes; fixed-substep RK4
 for nonlinear plants; variable communication steps). It carries its C sources and
 ``sources/buildDescription.xml``, so fmpy (``fmpy.build.build_platform_binary``) or any tool can
-recompile it, and ``binaries/<platform>/`` compiled here with ``gcc -O2 -shared -fPIC``.
+recompile it, and ``binaries/linux64`` and ``binaries/win64`` compiled here (``compile.py``: gcc,
+and the mingw-w64 cross compiler where it is installed).
 
-Structure (as the FMI Reference FMUs): ``c/plant_fmi2.c`` is the one hand-written, tested FMI 2.0
-wrapper shared by all plants; the generator writes only the model part (``model.c``: sizes, names,
-start values, parameter constraints; ``plant_casadi.c``: f, g and their Jacobians from CasADi).
+Structure (as the FMI Reference FMUs): ``c/fmi2_layer*.c`` is the one hand-written, tested generic
+FMI 2.0 layer shared by every native FMU (``c/fmi2_model.h`` is its model interface);
+``c/plant_fmi2.c`` is the plants' part behind it (zero-order hold, RK4, Jacobians, parameter
+constraints, against ``c/plant_model.h``); the generator writes only the model part (``model.c``:
+sizes, names, start values, parameter constraints; ``plant_casadi.c``: f, g and their Jacobians
+from CasADi).
 
 Variable names (``variableNamingConvention="structured"``), stable for SSP parameter bindings:
 

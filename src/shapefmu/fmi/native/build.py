@@ -6,26 +6,23 @@ import dataclasses
 import importlib.util
 import os
 import re
-import subprocess
+import sys
 import tempfile
 import tomllib
-import zipfile
-from importlib import resources
 from pathlib import Path
-
-import fmpy
 
 from shapefmu.fmi.native import description, description3, linear
 from shapefmu.fmi.native.codegen import write_sources
+from shapefmu.fmi.native.compile import LAYER_HEADERS, LAYER_SOURCES, build_binaries, build_description, copy_c_files, zip_fmu
 from shapefmu.fmi.native.model_part import ModelPart, check_name
 from shapefmu.fmi.native.nonlinear import NonlinearPlant
 from shapefmu.plants import as_plant
 from shapefmu.runtime.checks import check_size
 
-# The hand-written C shipped with every plant FMU (package data in fmi/native/c/).
-WRAPPER_SOURCES = ("plant_fmi2.c", "plant_expm.c")
-WRAPPER_HEADERS = ("plant_model.h", "plant_expm.h", "fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")
-COMPILE_FLAGS = ("-O2", "-shared", "-fPIC", "-std=c99", "-fvisibility=hidden")
+# The hand-written C shipped with every plant FMU (package data in fmi/native/c/): the generic FMI
+# 2.0 layer and the plants' part of it.
+WRAPPER_SOURCES = (*LAYER_SOURCES, "plant_fmi2.c", "plant_expm.c")
+WRAPPER_HEADERS = (*LAYER_HEADERS, "plant_model.h", "plant_expm.h")
 # The FMI 3.0 target: the same model part and numerics behind an FMI 3.0 wrapper.
 WRAPPER_SOURCES_3 = ("plant_fmi3.c", "plant_fmi3_refused.c", "plant_expm.c")
 WRAPPER_HEADERS_3 = ("plant_model.h", "plant_expm.h", "plant_fmi3.h", "fmi3Functions.h", "fmi3FunctionTypes.h",
@@ -65,17 +62,6 @@ def to_model_part(model, name: str | None = None) -> ModelPart:
     return linear.model_part(plant, name=name)
 
 
-def _compile(sources: Path, binary: Path, c_files: list[str]) -> None:
-    compiler = os.environ.get("CC", "gcc")
-    command = [compiler, *COMPILE_FLAGS, "-I", str(sources), *[str(sources / f) for f in c_files], "-o", str(binary), "-lm"]
-    try:
-        completed = subprocess.run(command, capture_output=True, text=True)
-    except FileNotFoundError:
-        raise ValueError(f"C compiler {compiler!r} not found: set CC or install gcc") from None
-    if completed.returncode != 0:
-        raise ValueError(f"compiling the plant FMU failed ({' '.join(command)}):\n{completed.stderr}")
-
-
 def build_plant_fmu(model, out_path, *, name: str | None = None, fmi_version: str = "2.0") -> Path:
     """Generate, compile and zip a plant FMU (Model Exchange + Co-Simulation); returns its path.
 
@@ -98,26 +84,18 @@ def build_plant_fmu(model, out_path, *, name: str | None = None, fmi_version: st
         root = Path(tmp)
         sources = root / "sources"
         sources.mkdir()
-        package = resources.files("shapefmu.fmi.native") / "c"
-        for file in wrapper_sources + (WRAPPER_HEADERS_3 if fmi3 else WRAPPER_HEADERS):
-            (sources / file).write_bytes((package / file).read_bytes())
+        copy_c_files(sources, wrapper_sources + (WRAPPER_HEADERS_3 if fmi3 else WRAPPER_HEADERS))
         # The GUID hashes the sources, which include the GUID: generate with a placeholder first.
         generated = write_sources(part, "", sources)
         c_files = [*wrapper_sources, *generated]
         guid = description.guid_of(part, {f: (sources / f).read_text(encoding="utf-8") for f in c_files})
         write_sources(part, guid, sources)
-        (sources / "buildDescription.xml").write_text(description.build_description(part, tuple(c_files)), encoding="utf-8")
-        binaries = root / "binaries" / (fmpy.platform_tuple if fmi3 else fmpy.platform)
-        binaries.mkdir(parents=True)
-        _compile(sources, binaries / f"{identifier}{fmpy.sharedLibraryExtension}", c_files)
+        (sources / "buildDescription.xml").write_text(build_description(identifier, c_files), encoding="utf-8")
+        note = build_binaries(root, identifier, c_files, f"plant {part.name}", fmi_version)
+        if note:
+            print(note, file=sys.stderr)
         (root / "modelDescription.xml").write_text(describe(part, guid, tuple(c_files)), encoding="utf-8")
-        out_path.parent.mkdir(parents=True, exist_ok=True)
-        partial = out_path.with_name(out_path.name + ".partial")
-        with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as archive:
-            for path in sorted(root.rglob("*")):
-                if path.is_file():
-                    archive.write(path, path.relative_to(root).as_posix())
-        os.replace(partial, out_path)
+        zip_fmu(root, out_path)
     return out_path
 
 

@@ -130,16 +130,3 @@ def model_description(part: ModelPart, guid: str, source_files: tuple[str, ...] 
   </ModelStructure>
 </fmiModelDescription>
 """
-
-
-def build_description(part: ModelPart, source_files: tuple[str, ...]) -> str:
-    files = "\n".join(f'      <SourceFile name="{name}"/>' for name in source_files)
-    return f"""<?xml version="1.0" encoding="UTF-8"?>
-<fmiBuildDescription fmiVersion="3.0">
-  <BuildConfiguration modelIdentifier="{model_identifier(part)}">
-    <SourceFileSet language="C99">
-{files}
-    </SourceFileSet>
-  </BuildConfiguration>
-</fmiBuildDescription>
-"""

@@ -19,11 +19,23 @@ def _number(value):
     return repr(float(value)) if isinstance(value, float) else str(value)
 
 
-def model_description(slave, guid, dependencies, experiment, pythonfmu_version):
+# The log categories of a pythonfmu FMU: (name, description).
+LOG_CATEGORIES = (
+    ("logStatusWarning", "Warnings"),
+    ("logStatusError", "Errors: bad parameters, non-finite inputs, calls out of order"),
+    ("logStatusFatal", "Failures of the embedded Python runtime"),
+    ("logAll", "Everything else (debug logging)"),
+)
+
+
+def model_description(slave, guid, dependencies, experiment, pythonfmu_version, *, native_sources=None,
+                      log_categories=LOG_CATEGORIES):
     """The XML text for ``slave`` (an initialised instance) with the given GUID.
 
     ``dependencies`` maps each output to the inputs it feeds through from; ``experiment`` is
-    (start, stop, step) for the DefaultExperiment.
+    (start, stop, step) for the DefaultExperiment. ``native_sources`` (the C files) describes a
+    native FMU made from the slave's variables (``shapefmu.fmi.native.sampled``): it uses the
+    host's memory callbacks and lists its sources; ``log_categories`` its log categories.
     """
     root = Element(
         "fmiModelDescription",
@@ -32,13 +44,15 @@ def model_description(slave, guid, dependencies, experiment, pythonfmu_version):
             "modelName": slave.model_name,
             "guid": guid,
             "description": slave.description,
-            "generationTool": f"shapefmu {__version__} (pythonfmu {pythonfmu_version} export library)",
+            "generationTool": f"shapefmu {__version__} "
+            + ("native sampled-filter generator" if native_sources is not None
+               else f"(pythonfmu {pythonfmu_version} export library)"),
             "generationDateAndTime": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
             "variableNamingConvention": "structured",
             "numberOfEventIndicators": "0",
         },
     )
-    SubElement(
+    cosimulation = SubElement(
         root,
         "CoSimulation",
         {
@@ -49,12 +63,16 @@ def model_description(slave, guid, dependencies, experiment, pythonfmu_version):
             "maxOutputDerivativeOrder": "0",
             "canRunAsynchronuously": "false",
             "canBeInstantiatedOnlyOncePerProcess": "false",
-            "canNotUseMemoryManagementFunctions": "true",
+            "canNotUseMemoryManagementFunctions": "true" if native_sources is None else "false",
             "canGetAndSetFMUstate": "true",
             "canSerializeFMUstate": "true",
             "providesDirectionalDerivative": "false",
         },
     )
+    if native_sources:
+        files = SubElement(cosimulation, "SourceFiles")
+        for name in native_sources:
+            SubElement(files, "File", {"name": name})
     used = sorted({v.unit for v in slave.variables if v.type == "Real"})
     units = SubElement(root, "UnitDefinitions")
     for name in used:
@@ -62,12 +80,7 @@ def model_description(slave, guid, dependencies, experiment, pythonfmu_version):
         if UNITS[name]:
             SubElement(unit, "BaseUnit", {k: str(e) for k, e in UNITS[name].items()})
     categories = SubElement(root, "LogCategories")
-    for name, text in (
-        ("logStatusWarning", "Warnings"),
-        ("logStatusError", "Errors: bad parameters, non-finite inputs, calls out of order"),
-        ("logStatusFatal", "Failures of the embedded Python runtime"),
-        ("logAll", "Everything else (debug logging)"),
-    ):
+    for name, text in log_categories:
         SubElement(categories, "Category", {"name": name, "description": text})
     start, stop, step = experiment
     SubElement(root, "DefaultExperiment", {"startTime": _number(start), "stopTime": _number(stop), "stepSize": _number(step)})

@@ -1,0 +1,190 @@
+/* FMU states of the generic FMI 2.0 layer: get, set, free, serialise and deserialise.
+ *
+ * A state is everything needed to resume exactly: the mode, the time, every variable's value and
+ * the model part's own data (model_save_state: a filter's delay line, its sample clock). The
+ * serialised form starts with a header that identifies this FMU's layout, so bytes of another FMU
+ * or a truncated copy are refused with a logged error.
+ */
+#include <string.h>
+
+#include "fmi2_layer.h"
+
+#define SERIAL_MAGIC 0x73686170464d5532ULL /* "shapFMU2" */
+
+typedef struct {
+    Fmi2Mode mode;
+    double time, start_time;
+    double *reals;
+    int *integers, *booleans;
+    char *strings;
+    unsigned char *model;
+    size_t model_size;
+} Snapshot;
+
+static size_t string_bytes(const Fmi2Instance *inst) { return inst->info.n_string * (FMI2_STRING_CAPACITY + 1); }
+
+static void free_snapshot(Fmi2Instance *inst, Snapshot *s) {
+    void *buffers[] = {s->reals, s->integers, s->booleans, s->strings, s->model};
+    for (size_t i = 0; i < sizeof buffers / sizeof buffers[0]; i++) fmi2_release(inst, buffers[i]);
+    inst->callbacks.freeMemory(s);
+}
+
+/* A snapshot with room for the value arrays and model_size bytes of model data. */
+static Snapshot *new_snapshot(Fmi2Instance *inst, size_t model_size) {
+    Snapshot *s = fmi2_allocate(inst, 1, sizeof(Snapshot));
+    if (s == NULL) return NULL;
+    memset(s, 0, sizeof *s);
+    const Fmi2ModelInfo *info = &inst->info;
+    s->reals = fmi2_allocate(inst, info->n_real, sizeof(double));
+    s->integers = fmi2_allocate(inst, info->n_integer, sizeof(int));
+    s->booleans = fmi2_allocate(inst, info->n_boolean, sizeof(int));
+    s->strings = fmi2_allocate(inst, string_bytes(inst), 1);
+    s->model = fmi2_allocate(inst, model_size, 1);
+    s->model_size = model_size;
+    if ((info->n_real && !s->reals) || (info->n_integer && !s->integers) || (info->n_boolean && !s->booleans)
+        || (info->n_string && !s->strings) || (model_size && !s->model)) {
+        free_snapshot(inst, s);
+        return NULL;
+    }
+    return s;
+}
+
+/* A snapshot to write into: *FMUstate if it has the right size, else a new one (the old freed). */
+static Snapshot *writable(Fmi2Instance *inst, fmi2FMUstate *FMUstate, size_t model_size) {
+    Snapshot *s = *FMUstate;
+    if (s != NULL && s->model_size == model_size) return s;
+    if (s != NULL) free_snapshot(inst, s);
+    *FMUstate = NULL;
+    return new_snapshot(inst, model_size);
+}
+
+static void copy_values(const Fmi2Instance *inst, double *reals, int *integers, int *booleans, char *strings,
+                        const double *from_reals, const int *from_integers, const int *from_booleans,
+                        const char *from_strings) {
+    const Fmi2ModelInfo *info = &inst->info;
+    if (info->n_real) memcpy(reals, from_reals, info->n_real * sizeof(double));
+    if (info->n_integer) memcpy(integers, from_integers, info->n_integer * sizeof(int));
+    if (info->n_boolean) memcpy(booleans, from_booleans, info->n_boolean * sizeof(int));
+    if (info->n_string) memcpy(strings, from_strings, string_bytes(inst));
+}
+
+fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
+    REQUIRE(c, ANY_MODE & ~FMI2_ERROR_STATE, "fmi2GetFMUstate");
+    REQUIRE_ARRAY(FMUstate, 1, "fmi2GetFMUstate");
+    Snapshot *s = writable(inst, FMUstate, model_state_size(inst));
+    if (s == NULL) return fmi2_fail(inst, "fmi2GetFMUstate: out of memory");
+    s->mode = inst->mode;
+    s->time = inst->time;
+    s->start_time = inst->start_time;
+    copy_values(inst, s->reals, s->integers, s->booleans, s->strings, inst->reals, inst->integers, inst->booleans,
+                inst->strings);
+    model_save_state(inst, s->model);
+    *FMUstate = s;
+    return fmi2OK;
+}
+
+fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate) {
+    REQUIRE(c, ANY_MODE, "fmi2SetFMUstate");
+    if (FMUstate == NULL) return fmi2_fail(inst, "fmi2SetFMUstate: FMUstate is NULL");
+    const Snapshot *s = FMUstate;
+    copy_values(inst, inst->reals, inst->integers, inst->booleans, inst->strings, s->reals, s->integers, s->booleans,
+                s->strings);
+    inst->time = s->time;
+    inst->start_time = s->start_time;
+    inst->mode = s->mode;
+    if (model_restore_state(inst, s->model, s->model_size) != 0)
+        return fmi2_fail(inst, "fmi2SetFMUstate: the state does not fit this instance's model data");
+    return fmi2OK;
+}
+
+fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
+    REQUIRE(c, ANY_MODE, "fmi2FreeFMUstate");
+    if (FMUstate == NULL || *FMUstate == NULL) return fmi2OK;
+    free_snapshot(inst, *FMUstate);
+    *FMUstate = NULL;
+    return fmi2OK;
+}
+
+/* Serialised layout: a header of 7 uint64 (magic, the four counts, mode, model bytes), the time and
+ * the start time, then the Real, Integer, Boolean and String values and the model bytes. */
+enum { HEADER_WORDS = 7 };
+
+static size_t serial_size(const Fmi2Instance *inst, size_t model_size) {
+    const Fmi2ModelInfo *info = &inst->info;
+    return HEADER_WORDS * sizeof(unsigned long long) + (2 + info->n_real) * sizeof(double)
+           + (info->n_integer + info->n_boolean) * sizeof(int) + string_bytes(inst) + model_size;
+}
+
+fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, size_t *size) {
+    REQUIRE(c, ANY_MODE, "fmi2SerializedFMUstateSize");
+    if (FMUstate == NULL || size == NULL) return fmi2_fail(inst, "fmi2SerializedFMUstateSize: NULL FMUstate or size");
+    *size = serial_size(inst, ((const Snapshot *)FMUstate)->model_size);
+    return fmi2OK;
+}
+
+static unsigned char *put(unsigned char *to, const void *from, size_t bytes) {
+    if (bytes) memcpy(to, from, bytes);
+    return to + bytes;
+}
+
+static const unsigned char *take(void *to, const unsigned char *from, size_t bytes) {
+    if (bytes) memcpy(to, from, bytes);
+    return from + bytes;
+}
+
+fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byte serializedState[], size_t size) {
+    REQUIRE(c, ANY_MODE, "fmi2SerializeFMUstate");
+    if (FMUstate == NULL || serializedState == NULL)
+        return fmi2_fail(inst, "fmi2SerializeFMUstate: NULL FMUstate or buffer");
+    const Snapshot *s = FMUstate;
+    if (size != serial_size(inst, s->model_size))
+        return fmi2_fail(inst, "fmi2SerializeFMUstate: buffer holds %zu bytes, the state needs %zu", size,
+                         serial_size(inst, s->model_size));
+    const Fmi2ModelInfo *info = &inst->info;
+    const unsigned long long header[HEADER_WORDS] = {SERIAL_MAGIC, info->n_real, info->n_integer, info->n_boolean,
+                                                     info->n_string, (unsigned long long)s->mode, s->model_size};
+    const double times[2] = {s->time, s->start_time};
+    unsigned char *p = put((unsigned char *)serializedState, header, sizeof header);
+    p = put(p, times, sizeof times);
+    p = put(p, s->reals, info->n_real * sizeof(double));
+    p = put(p, s->integers, info->n_integer * sizeof(int));
+    p = put(p, s->booleans, info->n_boolean * sizeof(int));
+    p = put(p, s->strings, string_bytes(inst));
+    put(p, s->model, s->model_size);
+    return fmi2OK;
+}
+
+fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedState[], size_t size, fmi2FMUstate *FMUstate) {
+    REQUIRE(c, ANY_MODE, "fmi2DeSerializeFMUstate");
+    if (serializedState == NULL || FMUstate == NULL)
+        return fmi2_fail(inst, "fmi2DeSerializeFMUstate: NULL buffer or FMUstate");
+    unsigned long long header[HEADER_WORDS];
+    if (size < sizeof header)
+        return fmi2_fail(inst, "fmi2DeSerializeFMUstate: got %zu bytes, fewer than a state's header", size);
+    const unsigned char *p = take(header, (const unsigned char *)serializedState, sizeof header);
+    const Fmi2ModelInfo *info = &inst->info;
+    const int mode_ok = header[5] != 0 && (header[5] & ~(unsigned long long)ANY_MODE) == 0;
+    if (header[0] != SERIAL_MAGIC || header[1] != info->n_real || header[2] != info->n_integer
+        || header[3] != info->n_boolean || header[4] != info->n_string || !mode_ok || header[6] > size)
+        return fmi2_fail(inst, "fmi2DeSerializeFMUstate: the bytes are not a serialised state of this FMU");
+    const size_t model_size = (size_t)header[6];
+    if (size != serial_size(inst, model_size))
+        return fmi2_fail(inst, "fmi2DeSerializeFMUstate: got %zu bytes, a state of this FMU has %zu", size,
+                         serial_size(inst, model_size));
+    Snapshot *s = writable(inst, FMUstate, model_size);
+    if (s == NULL) return fmi2_fail(inst, "fmi2DeSerializeFMUstate: out of memory");
+    double times[2];
+    s->mode = (Fmi2Mode)header[5];
+    p = take(times, p, sizeof times);
+    s->time = times[0];
+    s->start_time = times[1];
+    p = take(s->reals, p, info->n_real * sizeof(double));
+    p = take(s->integers, p, info->n_integer * sizeof(int));
+    p = take(s->booleans, p, info->n_boolean * sizeof(int));
+    p = take(s->strings, p, string_bytes(inst));
+    take(s->model, p, model_size);
+    /* Strings are read back as C strings: make every slot end inside itself. */
+    for (size_t i = 0; i < info->n_string; i++) s->strings[i * (FMI2_STRING_CAPACITY + 1) + FMI2_STRING_CAPACITY] = '\0';
+    *FMUstate = s;
+    return fmi2OK;
+}

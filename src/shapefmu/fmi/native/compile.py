@@ -1,0 +1,146 @@
+"""Compile and package a native FMU: its C sources into ``binaries/linux64`` and ``binaries/win64``,
+then the FMU archive.
+
+Every native FMU (plants, native shapers) is the one generic FMI 2.0 layer (``c/fmi2_layer*.c``)
+plus a model part. The linux64 binary is compiled with the system C compiler (``$CC``, default
+``gcc``); the win64 DLL with the mingw-w64 cross compiler (Debian ``gcc-mingw-w64-x86-64``, found
+as ``$MINGW_CC`` or ``x86_64-w64-mingw32-gcc``), so that one ``.fmu`` serves Linux and Windows
+hosts. Where the cross compiler is absent the FMU is built for linux64 only and ``build_binaries``
+says so in the note it returns; its ``sources/`` let any Windows tool compile it later.
+
+Object files are cached in the temporary directory by the hash of the compiler, its flags and the
+sources, so the generic layer is compiled once per machine rather than once per FMU.
+
+The DLL links libgcc statically and needs only the Windows C runtime (msvcrt.dll), which every
+Windows has.
+"""
+
+from __future__ import annotations
+
+import getpass
+import hashlib
+import os
+import shutil
+import subprocess
+import tempfile
+import threading
+import zipfile
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+
+# The generic FMI 2.0 layer and the FMI headers, shipped in every native FMU.
+LAYER_SOURCES = ("fmi2_layer.c", "fmi2_layer_state.c", "fmi2_layer_me.c")
+LAYER_HEADERS = ("fmi2_model.h", "fmi2_layer.h", "fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")
+MINGW = "x86_64-w64-mingw32-gcc"
+
+
+@dataclass(frozen=True)
+class Platform:
+    """One FMI platform: its binaries/ folder, the compiler command, flags and library suffix."""
+
+    name: str
+    compiler: str
+    flags: tuple[str, ...]
+    suffix: str
+
+
+def linux64() -> Platform:
+    return Platform("linux64", os.environ.get("CC", "gcc"),
+                    ("-O2", "-shared", "-fPIC", "-std=c99", "-fvisibility=hidden"), ".so")
+
+
+def win64() -> Platform | None:
+    """The mingw-w64 cross compiler, or None where it is not installed."""
+    compiler = os.environ.get("MINGW_CC") or shutil.which(MINGW)
+    if not compiler:
+        return None
+    return Platform("win64", compiler, ("-O2", "-shared", "-std=c99", "-static-libgcc", "-s"), ".dll")
+
+
+def copy_c_files(sources: Path, names) -> None:
+    """Copy package files of ``shapefmu.fmi.native/c`` into ``sources``."""
+    package = resources.files("shapefmu.fmi.native") / "c"
+    for name in names:
+        (sources / name).write_bytes((package / name).read_bytes())
+
+
+def _run(command: list[str], compiler: str, what: str, platform: str) -> None:
+    try:
+        completed = subprocess.run(command, capture_output=True, text=True)
+    except FileNotFoundError:
+        raise ValueError(f"C compiler {compiler!r} not found: set CC or install gcc") from None
+    if completed.returncode != 0:
+        raise ValueError(f"compiling the {what} FMU for {platform} failed ({' '.join(command)}):\n{completed.stderr}")
+
+
+def _object(platform: Platform, sources: Path, c_file: str, headers: bytes, what: str) -> Path:
+    """The object file of ``c_file``, from a cache keyed by the compiler, its flags and the bytes of
+    the file and of every header beside it: the generic layer is compiled once, not per FMU."""
+    digest = hashlib.sha256(repr((platform.compiler, platform.flags)).encode() + headers)
+    digest.update((sources / c_file).read_bytes())
+    cache = Path(tempfile.gettempdir()) / f"shapefmu-objects-{getpass.getuser()}"
+    cache.mkdir(exist_ok=True)
+    target = cache / f"{digest.hexdigest()}.o"
+    if not target.is_file():
+        partial = cache / f"{digest.hexdigest()}.{os.getpid()}.{threading.get_ident()}.partial.o"
+        flags = [f for f in platform.flags if f not in ("-shared", "-s")]
+        _run([platform.compiler, *flags, "-c", "-I", str(sources), str(sources / c_file), "-o", str(partial)],
+             platform.compiler, what, platform.name)
+        os.replace(partial, target)
+    return target
+
+
+def compile_binary(platform: Platform, sources: Path, c_files, binary: Path, what: str) -> None:
+    """Compile ``c_files`` (in ``sources``) into the shared library ``binary``."""
+    binary.parent.mkdir(parents=True, exist_ok=True)
+    headers = b"".join(path.name.encode() + path.read_bytes() for path in sorted(sources.glob("*.h")))
+    objects = [str(_object(platform, sources, f, headers, what)) for f in c_files]
+    _run([platform.compiler, *platform.flags, *objects, "-o", str(binary), "-lm"], platform.compiler, what,
+         platform.name)
+
+
+# binaries/ folder names per FMI version: FMI 2.0 names platforms, FMI 3.0 architecture-os tuples.
+BINARY_FOLDERS = {"2.0": ("linux64", "win64"), "3.0": ("x86_64-linux", "x86_64-windows")}
+
+
+def build_binaries(root: Path, identifier: str, c_files, what: str, fmi_version: str = "2.0") -> str:
+    """``root/binaries/<platform>/<identifier>.<so|dll>`` for Linux and, where mingw-w64 is
+    installed, Windows (folders named as ``fmi_version`` names them); returns "" or a note saying
+    the Windows binary was left out and why."""
+    sources = root / "sources"
+    linux_folder, windows_folder = BINARY_FOLDERS[fmi_version]
+    compile_binary(linux64(), sources, c_files, root / "binaries" / linux_folder / f"{identifier}.so", what)
+    windows = win64()
+    if windows is None:
+        return (f"note: {what} FMU built for {linux_folder} only: the mingw-w64 cross compiler ({MINGW}, Debian "
+                f"package gcc-mingw-w64-x86-64) is not installed, so it has no binaries/{windows_folder} "
+                f"(its sources/ are inside)")
+    compile_binary(windows, sources, c_files, root / "binaries" / windows_folder / f"{identifier}.dll", what)
+    return ""
+
+
+def zip_fmu(root: Path, out_path: Path) -> Path:
+    """Zip the FMU folder ``root`` into ``out_path`` (written beside and moved, never half-written)."""
+    out_path.parent.mkdir(parents=True, exist_ok=True)
+    partial = out_path.with_name(out_path.name + ".partial")
+    with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as archive:
+        for path in sorted(root.rglob("*")):
+            if path.is_file():
+                archive.write(path, path.relative_to(root).as_posix())
+    shutil.move(partial, out_path)
+    return out_path
+
+
+def build_description(identifier: str, source_files) -> str:
+    """sources/buildDescription.xml (FMI 2.0.4 / 3.0 build description) listing the C sources."""
+    files = "\n".join(f'      <SourceFile name="{name}"/>' for name in source_files)
+    return f"""<?xml version="1.0" encoding="UTF-8"?>
+<fmiBuildDescription fmiVersion="3.0">
+  <BuildConfiguration modelIdentifier="{identifier}">
+    <SourceFileSet language="C99">
+{files}
+    </SourceFileSet>
+  </BuildConfiguration>
+</fmiBuildDescription>
+"""

@@ -1,0 +1,173 @@
+"""Native C Shaper and ShapeFilter FMUs: the pythonfmu slaves' variables and design, run in C.
+
+``build_native_fmu("Shaper" | "ShapeFilter", out_path, **start_values) -> Path`` writes an FMI 2.0
+Co-Simulation FMU that needs no Python on the host: the generic FMI 2.0 layer (``c/fmi2_layer*.c``),
+the sampled filters' part of it (``c/sampled_fmi2.c``, ``c/sampled_fir.c``, ``c/shaper_designs.c``)
+and a generated ``model.c`` of a few dozen lines (its variables, start values and design), with
+``sources/``, ``buildDescription.xml`` and binaries for linux64 and win64 (``compile.py``).
+
+The design is made here, at build time, by the same code the pythonfmu FMU runs at initialisation
+(``fmi.python.builder.designed_slave``: any kind, single and multi-mode), and stored as parameters:
+``impulse_time[i]`` (s) and ``impulse_amplitude[i]`` of a Shaper, ``tap[i]`` of a ShapeFilter, with
+the sampling period. They are tunable. The variables of the pythonfmu FMU keep their names, types and
+start values, so an SSP can bind either FMU: a closed-form Shaper (zv, zvd, zvdd, zv_dn, mzv)
+re-designs in C when kind, n, n_modes, f[i] or zeta[i] change before initialisation (as many
+impulses as this FMU holds: ``impulses_per_mode ** n_modes`` of its build kind), a Shaper's ``Ts``
+may change (the impulses are re-gridded), and every other design parameter keeps its build value
+(setting another one is refused with fmi2Error and a message saying to rebuild).
+
+Sampled semantics: the absolute grid t0 + k Ts of DESIGN.md ("Sampled FMUs take their samples on
+the absolute grid"), as ``c/sampled_fir.c`` documents: any step size, outputs held between samples,
+feed-through on the grid, at most 10^7 samples per step.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import sys
+import tempfile
+import uuid
+from pathlib import Path
+from types import SimpleNamespace
+
+from shapefmu.fmi.native.compile import LAYER_HEADERS, LAYER_SOURCES, build_binaries, build_description, copy_c_files, zip_fmu
+from shapefmu.fmi.python.builder import designed_slave
+from shapefmu.fmi.python.model_description import model_description
+from shapefmu.fmi.python.slave_base import Variable
+
+SOURCES = (*LAYER_SOURCES, "sampled_fmi2.c", "sampled_fir.c", "shaper_designs.c")
+HEADERS = (*LAYER_HEADERS, "sampled_model.h", "sampled_fir.h", "shaper_designs.h")
+MODEL_SOURCE = "model.c"
+# Kinds the C part re-designs, with their impulses per mode (n = the derivative order of zv_dn).
+CLOSED_FORM = {"zv": lambda n: 2, "zvd": lambda n: 3, "zvdd": lambda n: 4, "zv_dn": lambda n: n + 2, "mzv": lambda n: 3}
+# Bounds on what one FMU declares (each entry is a ScalarVariable of its modelDescription.xml).
+MAX_IMPULSES = 4096
+MAX_TAPS = 100_000
+_CATEGORIES = (("logStatusError", "Errors: bad parameters, non-finite inputs, calls out of order"),
+               ("logAll", "Everything else (debug logging)"))
+_ROLES = {("parameter", "fixed"): "FMI2_PARAMETER_FIXED", ("parameter", "tunable"): "FMI2_PARAMETER_TUNABLE",
+          ("input", "continuous"): "FMI2_INPUT", ("output", "continuous"): "FMI2_COMPUTED"}
+_TYPE_ORDER = ("Real", "Integer", "Boolean", "String")
+
+
+def _c_string(text: str) -> str:
+    """A C string literal of ``text``: printable ASCII without quotes or backslashes only."""
+    if len(text) > 63 or any(not (32 <= ord(c) < 127) or c in '"\\' for c in text):
+        raise ValueError(f"a string parameter must be at most 63 printable ASCII characters without quotes or "
+                         f"backslashes, got {text!r}")
+    return f'"{text}"'
+
+
+def _meaning(model: str, name: str) -> tuple[str, int]:
+    """(SampledMeaning, 0-based index) of variable ``name`` (sampled_model.h)."""
+    base, _, index = name.partition("[")
+    i = int(index.rstrip("]")) - 1 if index else 0
+    common = {"u": "MEANS_INPUT", "y": "MEANS_OUTPUT", "u0": "MEANS_REST", "Ts_used": "MEANS_PERIOD_USED",
+              "impulse_time": "MEANS_IMPULSE_TIME", "impulse_amplitude": "MEANS_IMPULSE_AMPLITUDE", "tap": "MEANS_TAP"}
+    shaper = {"Ts": "MEANS_PERIOD", "kind": "MEANS_KIND", "n": "MEANS_ORDER", "n_modes": "MEANS_MODES",
+              "f": "MEANS_FREQUENCY", "zeta": "MEANS_DAMPING", "vtol": "MEANS_TOLERANCE"}
+    meanings = {**common, **shaper} if model == "Shaper" else common
+    return meanings.get(base, "MEANS_BUILD_VALUE"), i
+
+
+def _design_variables(slave) -> tuple[list[Variable], dict, int, bool]:
+    """The design parameters to add (impulses or taps), their values, the capacity and whether the
+    Shaper's kind re-designs in C."""
+    values, extra = {}, []
+
+    def add(name, unit, description, value):
+        extra.append(Variable(name, 0, "Real", "parameter", "tunable", float(value), unit, description))
+        values[name] = float(value)
+
+    if slave.model_name == "Shaper":
+        times, amplitudes = slave.design
+        kind, closed = slave.values["kind"], slave.values["kind"] in CLOSED_FORM
+        capacity = CLOSED_FORM[kind](slave.values["n"]) ** slave.values["n_modes"] if closed else len(times)
+        if capacity > MAX_IMPULSES:
+            raise ValueError(f"a native {kind} shaper for {slave.values['n_modes']} modes holds {capacity} impulses; "
+                             f"at most {MAX_IMPULSES}")
+        padding = capacity - len(times)  # unused entries of a closed-form shaper: amplitude 0 at t = 0
+        for i, t in enumerate([*times, *[0.0] * padding], 1):
+            add(f"impulse_time[{i}]", "s", f"time of impulse {i} (tunable; re-designed in C for closed-form kinds)", t)
+        for i, a in enumerate([*amplitudes, *[0.0] * padding], 1):
+            add(f"impulse_amplitude[{i}]", "1", f"amplitude of impulse {i} (tunable)", a)
+        return extra, values, capacity, closed
+    taps = slave.taps
+    if len(taps) > MAX_TAPS:
+        raise ValueError(f"a native shape filter holds at most {MAX_TAPS} taps, this design has {len(taps)}: "
+                         f"use a longer Ts")
+    for i, w in enumerate(taps, 1):
+        add(f"tap[{i}]", "1", f"tap {i} of the FIR filter, at delay {i - 1} samples (tunable)", w)
+    return extra, values, len(taps), False
+
+
+def _model_c(slave, variables, values, guid, capacity, closed, feedthrough) -> str:
+    rows = []
+    for var in variables:
+        meaning, index = _meaning(slave.model_name, var.name)
+        value = values.get(var.name, 0.0)
+        start, string = ("0.0", _c_string(value)) if var.type == "String" else (repr(float(value)), "NULL")
+        role = _ROLES[(var.causality, var.variability)]
+        rows.append(f'    {{"{var.name}", {role}, {meaning}, {index}, {start}, {string}}},')
+    counts = [sum(v.type == t for v in variables) for t in _TYPE_ORDER]
+    body = "\n".join(rows)
+    return f"""/* Model part of the native {slave.model_name} FMU, generated by shapefmu.fmi.native.sampled: do not edit.
+ * Its variables by value reference, their start values and the design made at build time. */
+#include "sampled_model.h"
+
+static const SampledVariable variables[] = {{
+{body}
+}};
+
+const SampledModel sampled_model = {{
+    "{guid}", {int(slave.model_name == "Shaper")}, {int(closed)}, {int(feedthrough)}, {slave_max_modes(slave)},
+    {capacity}, {repr(float(slave.values.get("Ts_used", 0.0)))},
+    {counts[0]}, {counts[1]}, {counts[2]}, {counts[3]}, variables
+}};
+"""
+
+
+def slave_max_modes(slave) -> int:
+    """How many f[i], zeta[i] pairs the slave declares."""
+    return sum(1 for v in slave.variables if v.name.startswith("f["))
+
+
+def build_native_fmu(name: str, out_path, **start_values) -> Path:
+    """Build the native ``name`` ("Shaper" or "ShapeFilter") FMU with ``start_values`` to ``out_path``."""
+    if name not in ("Shaper", "ShapeFilter"):
+        raise ValueError(f"name must be Shaper or ShapeFilter, got {name!r}")
+    slave = designed_slave(name, start_values)
+    extra, values, capacity, closed = _design_variables(slave)
+    values.update(slave.values)
+    declared = [v for v in slave.variables] + extra
+    variables = sorted(declared, key=lambda v: _TYPE_ORDER.index(v.type))  # value references by type (fmi2_model.h)
+    numbered = [Variable(v.name, vr, v.type, v.causality, v.variability, v.start, v.unit, v.description, v.minimum,
+                         v.maximum) for vr, v in enumerate(variables)]
+    dependencies = {"y": ["u"]} if name == "Shaper" else slave.output_dependencies()
+    feedthrough = "u" in dependencies["y"]
+    out_path = Path(out_path)
+    with tempfile.TemporaryDirectory(prefix="shapefmu_native_") as tmp:
+        root = Path(tmp)
+        sources = root / "sources"
+        sources.mkdir()
+        copy_c_files(sources, SOURCES + HEADERS)
+        c_files = [*SOURCES, MODEL_SOURCE]
+        digest = hashlib.md5(_model_c(slave, numbered, values, "", capacity, closed, feedthrough).encode())
+        for file in SOURCES + HEADERS:
+            digest.update((sources / file).read_bytes())
+        guid = "{" + str(uuid.UUID(digest.hexdigest())) + "}"
+        (sources / MODEL_SOURCE).write_text(_model_c(slave, numbered, values, guid, capacity, closed, feedthrough),
+                                            encoding="utf-8")
+        (sources / "buildDescription.xml").write_text(build_description(name, c_files), encoding="utf-8")
+        note = build_binaries(root, name, c_files, f"native {name}")
+        if note:
+            print(note, file=sys.stderr)
+        view = SimpleNamespace(model_name=name, variables=numbered, values=values,
+                               description=f"{slave.description} (native C, designed at build time)")
+        experiment = slave.experiment()
+        xml = model_description(view, guid, dependencies, experiment, "", native_sources=tuple(c_files),
+                                log_categories=_CATEGORIES)
+        (root / "modelDescription.xml").write_text(xml, encoding="utf-8")
+        zip_fmu(root, out_path)
+    return out_path
+
