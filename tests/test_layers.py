@@ -8,6 +8,7 @@ import ast
 from pathlib import Path
 
 import shapefmu
+from shapefmu.cosim.graph import _strongly_connected
 
 PACKAGE = Path(shapefmu.__file__).parent
 
@@ -68,34 +69,8 @@ def _layer(module: str) -> int:
 
 
 def _cycles(graph):
-    """Strongly connected components with more than one module (Tarjan)."""
-    index, low, stack, on_stack, found = {}, {}, [], set(), []
-
-    def visit(node):
-        index[node] = low[node] = len(index)
-        stack.append(node)
-        on_stack.add(node)
-        for target in graph[node]:
-            if target not in index:
-                visit(target)
-                low[node] = min(low[node], low[target])
-            elif target in on_stack:
-                low[node] = min(low[node], index[target])
-        if low[node] == index[node]:
-            component = []
-            while True:
-                member = stack.pop()
-                on_stack.discard(member)
-                component.append(member)
-                if member == node:
-                    break
-            if len(component) > 1:
-                found.append(sorted(component))
-
-    for node in sorted(graph):
-        if node not in index:
-            visit(node)
-    return found
+    """Strongly connected components of more than one module: the master's own Tarjan (cosim.graph)."""
+    return sorted(sorted(component) for component in _strongly_connected(sorted(graph), graph) if len(component) > 1)
 
 
 def test_every_top_level_module_has_a_layer():
