@@ -8,10 +8,8 @@ a call out of order) with reset, and a second initialisation.
 """
 
 import shutil
-import subprocess
-import zipfile
-
 import pytest
+from test_plantgen_valgrind import run_driver_under_valgrind
 
 DRIVER = r"""
 #include <stdio.h>
@@ -116,17 +114,4 @@ int main(void) {
 @pytest.mark.parametrize("which", ["shaper", "filter"])
 def test_valgrind_finds_no_invalid_access_and_no_leak(native_shapers, native_filters, tmp_path, which):
     fmu = native_shapers[("zv_dn", 2)][0] if which == "shaper" else native_filters["hanning2"][0]
-    with zipfile.ZipFile(fmu) as archive:
-        archive.extractall(tmp_path)
-    sources = tmp_path / "sources"
-    (tmp_path / "driver.c").write_text(DRIVER)
-    program = tmp_path / "driver"
-    subprocess.run(["gcc", "-g", "-O1", "-std=c99", "-I", str(sources), str(tmp_path / "driver.c"),
-                    *map(str, sorted(sources.glob("*.c"))), "-o", str(program), "-lm"], check=True)
-    completed = subprocess.run(
-        ["valgrind", "--tool=memcheck", "--leak-check=full", "--show-leak-kinds=definite,indirect,possible",
-         "--errors-for-leak-kinds=definite,indirect,possible", "--error-exitcode=99", str(program)],
-        capture_output=True, text=True, timeout=120)
-    assert completed.returncode == 0, completed.stderr[-3000:] + completed.stdout
-    assert completed.stdout.startswith("ok ")
-    assert "ERROR SUMMARY: 0 errors" in completed.stderr
+    run_driver_under_valgrind(fmu, DRIVER, tmp_path)
