@@ -7,7 +7,9 @@
 
 The host keeps time as ``t += h`` and trims the last step onto the stop time, can step by stop/N
 or by random sizes, and tears its instances down normally, from an exit handler registered before
-it loaded the FMUs, or never (its header comment lists the options).
+it loaded the FMUs, or never; it can set Reals in initialization mode (``--set-real``), tear down
+after a failed call as OMSimulator does (``--on-error omsimulator``), and make any list of calls on
+one instance (``--calls``). Its header comment lists the options.
 """
 
 from __future__ import annotations

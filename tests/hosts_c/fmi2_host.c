@@ -32,6 +32,28 @@
  *                        the FMUs, finalise it at the end of main (as a Python program's exit
  *                        does, before the C exit handlers). The exit-handler teardown then prints
  *                        "teardown STATUS" per fmi2Terminate instead of failing on a non-OK one.
+ *   --set-real VR=VALUE  after an --fmu: set that FMU's Real VR to VALUE in initialization mode,
+ *                        between fmi2EnterInitializationMode and fmi2ExitInitializationMode
+ *                        (repeatable); every instance of every FMU enters initialization mode
+ *                        before any leaves it, as in OMSimulator
+ *   --on-error MODE      what a call answering anything but fmi2OK does (not in an exit handler):
+ *                        exit: the process exits with status 2 (the default);
+ *                        omsimulator: what OMSimulator 3.0 does when a run fails (oms_RunFile):
+ *                        print "failed CALL STATUS"; terminate the system: every instance in turn
+ *                        gets fmi2Terminate and, if that is fmi2OK, fmi2FreeInstance, and the first
+ *                        one not fmi2OK ends the round (SystemWC::terminate,
+ *                        ComponentFMUCS::terminate); if that round failed, terminate again with the
+ *                        same handles, freed ones included (oms_terminate); if that failed too,
+ *                        fmi2FreeInstance on every instance (deleting the model: ~ComponentFMUCS).
+ *                        Each call is printed ("terminate NAME STATUS", "free NAME"), then "done",
+ *                        and the process exits 0: only a crash fails it
+ *   --calls LIST         instead of a run: instantiate one instance of the first FMU and make the
+ *                        comma-separated calls in order, printing "CALL STATUS" for each (0..4),
+ *                        then exit 0 (only a crash fails). CALL is one of setup, enter, set (the
+ *                        --set-real values), exit, get (the outputs), step (h = --step, default
+ *                        1e-3, from the time the host keeps), terminate, reset, free (printed as
+ *                        "free -": it returns nothing). After free the host keeps the handle, as
+ *                        OMSimulator does, so calls listed after it reach a freed instance
  * At every communication point the host sets the inputs, reads the outputs, then steps. Any call
  * that returns anything but fmi2OK makes the process exit with status 2 (3 from the exit handler).
  */
@@ -72,12 +94,13 @@ typedef struct {
     const char* dir;
     const char* identifier;
     const char* guid;
-    fmi2ValueReference in[MAX_VRS], out[MAX_VRS];
-    size_t n_in, n_out;
+    fmi2ValueReference in[MAX_VRS], out[MAX_VRS], set[MAX_VRS];
+    double set_values[MAX_VRS];
+    size_t n_in, n_out, n_set;
     void* lib;
     Instantiate instantiate;
     Setup setup;
-    Phase enter, exit_init, terminate;
+    Phase enter, exit_init, terminate, reset;
     Free free_instance;
     Reals set_real, get_real;
     Step do_step;
@@ -89,6 +112,9 @@ static int n_fmus = 0, n_instances = 1;
 static const char* teardown = "normal";
 static Callbacks callbacks;
 static const char* embed_python = NULL;
+static const char* on_error = "exit";
+
+static void omsimulator_teardown(void);
 
 static void logger(void* env, const char* name, int status, const char* category, const char* message, ...)
 {
@@ -107,6 +133,13 @@ static void check(fmi2Status status, const char* call, const Fmu* f, double t, i
     fprintf(stderr, "FAIL %s of %s returned status %d at t = %.17g\n", call, f->identifier, (int)status, t);
     fflush(stderr);
     if (in_exit_handler) _exit(3); /* exit() from an exit handler is undefined */
+    if (strcmp(on_error, "omsimulator") == 0) {
+        printf("failed %s %d\n", call, (int)status);
+        omsimulator_teardown();
+        printf("done\n");
+        fflush(stdout);
+        exit(0);
+    }
     exit(2);
 }
 
@@ -134,6 +167,7 @@ static void load(Fmu* f)
     *(void**)&f->enter = symbol(f, "fmi2EnterInitializationMode");
     *(void**)&f->exit_init = symbol(f, "fmi2ExitInitializationMode");
     *(void**)&f->terminate = symbol(f, "fmi2Terminate");
+    *(void**)&f->reset = symbol(f, "fmi2Reset");
     *(void**)&f->free_instance = symbol(f, "fmi2FreeInstance");
     *(void**)&f->set_real = symbol(f, "fmi2SetReal");
     *(void**)&f->get_real = symbol(f, "fmi2GetReal");
@@ -156,6 +190,39 @@ static void terminate_all(int free_too, int in_exit_handler)
                 fmus[i].free_instance(fmus[i].c[j]);
                 fmus[i].c[j] = NULL;
             }
+        }
+    }
+}
+
+/* One round of OMSimulator's system terminate (see --on-error): 1 if every instance was terminated. */
+static int omsimulator_terminate_round(void)
+{
+    int i, j, status;
+    for (i = 0; i < n_fmus; i++) {
+        for (j = 0; j < n_instances; j++) {
+            if (fmus[i].c[j] == NULL) continue; /* never instantiated */
+            status = (int)fmus[i].terminate(fmus[i].c[j]);
+            printf("terminate %s_%d %d\n", fmus[i].identifier, j, status);
+            fflush(stdout);
+            if (status != fmi2OK) return 0;
+            fmus[i].free_instance(fmus[i].c[j]); /* the handle is kept, as OMSimulator keeps it */
+            printf("free %s_%d\n", fmus[i].identifier, j);
+            fflush(stdout);
+        }
+    }
+    return 1;
+}
+
+static void omsimulator_teardown(void)
+{
+    int i, j;
+    if (omsimulator_terminate_round() || omsimulator_terminate_round()) return;
+    for (i = 0; i < n_fmus; i++) {
+        for (j = 0; j < n_instances; j++) {
+            if (fmus[i].c[j] == NULL) continue;
+            fmus[i].free_instance(fmus[i].c[j]);
+            printf("free %s_%d\n", fmus[i].identifier, j);
+            fflush(stdout);
         }
     }
 }
@@ -233,6 +300,49 @@ static void step_all(double t, double h)
     }
 }
 
+/* --calls: the listed calls on one instance of the first FMU, each status printed; 0 unless a
+ * call is unknown (64) or the instance cannot be made (2). A crash is the host's signal. */
+static int run_calls(char* list, double t0, double h)
+{
+    Fmu* f = &fmus[0];
+    char uri[4200];
+    double t = t0, y[MAX_VRS];
+    char* call;
+    int status;
+    load(f);
+    snprintf(uri, sizeof(uri), "file://%s/resources", f->dir);
+    f->c[0] = f->instantiate(f->identifier, 1, f->guid, uri, &callbacks, 0, 0);
+    if (f->c[0] == NULL) {
+        fprintf(stderr, "FAIL fmi2Instantiate of %s returned NULL\n", f->identifier);
+        return 2;
+    }
+    for (call = strtok(list, ","); call != NULL; call = strtok(NULL, ",")) {
+        if (strcmp(call, "free") == 0) {
+            f->free_instance(f->c[0]);
+            printf("free -\n");
+            fflush(stdout);
+            continue;
+        }
+        if (strcmp(call, "setup") == 0) status = f->setup(f->c[0], 0, 0.0, t0, 0, 0.0);
+        else if (strcmp(call, "enter") == 0) status = f->enter(f->c[0]);
+        else if (strcmp(call, "set") == 0) status = f->set_real(f->c[0], f->set, f->n_set, f->set_values);
+        else if (strcmp(call, "exit") == 0) status = f->exit_init(f->c[0]);
+        else if (strcmp(call, "get") == 0) status = f->get_real(f->c[0], f->out, f->n_out, y);
+        else if (strcmp(call, "terminate") == 0) status = f->terminate(f->c[0]);
+        else if (strcmp(call, "reset") == 0) status = f->reset(f->c[0]);
+        else if (strcmp(call, "step") == 0) {
+            status = f->do_step(f->c[0], t, h, 1);
+            if (status == fmi2OK) t += h;
+        } else {
+            fprintf(stderr, "usage: unknown call %s in --calls\n", call);
+            return 64;
+        }
+        printf("%s %d\n", call, status);
+        fflush(stdout);
+    }
+    return 0;
+}
+
 /* Start (start = 1) or finalise (0) the Python of --embed-python. */
 static void python_host(int start)
 {
@@ -258,6 +368,7 @@ int main(int argc, char** argv)
     long steps = 0, random_steps = 0;
     int passes = 1, pass, a, i, j;
     const char* csv_path = NULL;
+    char* calls = NULL;
     FILE* csv = NULL;
     for (a = 1; a < argc; a++) {
         const char* o = argv[a];
@@ -290,11 +401,23 @@ int main(int argc, char** argv)
         else if (more >= 1 && strcmp(o, "--probe") == 0) probe = atof(argv[++a]);
         else if (more >= 1 && strcmp(o, "--csv") == 0) csv_path = argv[++a];
         else if (more >= 1 && strcmp(o, "--embed-python") == 0) embed_python = argv[++a];
+        else if (more >= 1 && strcmp(o, "--on-error") == 0) on_error = argv[++a];
+        else if (more >= 1 && strcmp(o, "--calls") == 0) calls = argv[++a];
+        else if (more >= 1 && strcmp(o, "--set-real") == 0 && n_fmus > 0 && fmus[n_fmus - 1].n_set < MAX_VRS
+                 && strchr(argv[a + 1], '=') != NULL) {
+            Fmu* f = &fmus[n_fmus - 1];
+            f->set[f->n_set] = (fmi2ValueReference)strtoul(argv[++a], NULL, 10);
+            f->set_values[f->n_set++] = atof(strchr(argv[a], '=') + 1);
+        }
         else {
             fprintf(stderr, "usage: see the comment at the top of fmi2_host.c (bad argument %s)\n", o);
             return 64;
         }
     }
+    callbacks.logger = logger;
+    callbacks.allocateMemory = calloc;
+    callbacks.freeMemory = free;
+    if (calls != NULL && n_fmus > 0) return run_calls(calls, t0, isnan(step) ? 1e-3 : step);
     if (n_fmus == 0 || n_instances < 1 || n_instances > MAX_INSTANCES || passes < 1
         || (random_steps == 0 && (isnan(stop) || (isnan(step) && steps <= 0)))) {
         fprintf(stderr, "usage: see the comment at the top of fmi2_host.c\n");
@@ -308,9 +431,6 @@ int main(int argc, char** argv)
         return 2;
     }
     if (embed_python != NULL) python_host(1);
-    callbacks.logger = logger;
-    callbacks.allocateMemory = calloc;
-    callbacks.freeMemory = free;
     for (pass = 0; pass < passes; pass++) {
         double t = t0, h;
         long k;
@@ -328,8 +448,12 @@ int main(int argc, char** argv)
                 }
                 check(f->setup(f->c[j], 0, 0.0, t0, 0, 0.0), "fmi2SetupExperiment", f, t0, 0);
                 check(f->enter(f->c[j]), "fmi2EnterInitializationMode", f, t0, 0);
-                check(f->exit_init(f->c[j]), "fmi2ExitInitializationMode", f, t0, 0);
+                if (f->n_set > 0) check(f->set_real(f->c[j], f->set, f->n_set, f->set_values), "fmi2SetReal", f, t0, 0);
             }
+        }
+        /* As OMSimulator does: every instance is made and in initialization mode before any leaves it. */
+        for (i = 0; i < n_fmus; i++) {
+            for (j = 0; j < n_instances; j++) check(fmus[i].exit_init(fmus[i].c[j]), "fmi2ExitInitializationMode", &fmus[i], t0, 0);
         }
         if (!isnan(probe)) {
             for (i = 0; i < n_fmus; i++) {

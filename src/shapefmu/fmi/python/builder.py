@@ -2,9 +2,9 @@
 
 An FMU holds
 
-- ``binaries/linux64/<Model>.so``: the C front end (``shim/fmi2_shim.c`` and
-  ``shim/python_runtime.c``, compiled here with the system C compiler), which makes libpython
-  global, starts the interpreter and forwards to
+- ``binaries/linux64/<Model>.so``: the C front end (``shim/fmi2_shim.c``, ``shim/fmu_states.c``
+  and ``shim/python_runtime.c``, compiled here with the system C compiler), which makes libpython
+  global, starts the interpreter, keeps the FMI 2.0 state machine and forwards to
 - ``binaries/linux64/<Model>_pythonfmu.so``: pythonfmu's export library, which embeds Python;
 - ``resources/<package>/``: the slave, its base and ``runtime/``, under a package name made of the
   shapefmu version and a hash of exactly these sources, so FMUs built from different code never
@@ -42,7 +42,7 @@ from shapefmu.fmi.python.slaves import SLAVES
 PYTHON_FMI_DIR = Path(__file__).parent
 PACKAGE_DIR = PYTHON_FMI_DIR.parent.parent
 SHIM_DIR = PYTHON_FMI_DIR / "shim"
-SHIM_SOURCES = (SHIM_DIR / "fmi2_shim.c", SHIM_DIR / "python_runtime.c")
+SHIM_SOURCES = (SHIM_DIR / "fmi2_shim.c", SHIM_DIR / "fmu_states.c", SHIM_DIR / "python_runtime.c")
 # The FMI 2.0 standard headers, shared with the native FMUs.
 FMI_HEADERS_DIR = PYTHON_FMI_DIR.parent / "native" / "c"
 SHIM_FILES = (*SHIM_SOURCES, SHIM_DIR / "fmi2_shim.h", FMI_HEADERS_DIR / "fmi2FunctionTypes.h",

@@ -1,7 +1,7 @@
 /*
  * FMI 2.0 co-simulation front end of every shapefmu FMU: binaries/linux64/<modelIdentifier>.so,
- * compiled by builder.py from this file and python_runtime.c (the sources are kept in the FMU's
- * resources/shim/ for the record).
+ * compiled by builder.py from this file, fmu_states.c and python_runtime.c (the sources are kept in
+ * the FMU's resources/shim/ for the record).
  *
  * Why it exists. pythonfmu's export library (shipped beside this file as <modelIdentifier>_pythonfmu.so)
  * embeds Python but is not linked against libpython, finalises the interpreter at process exit
@@ -27,7 +27,26 @@
  *      fmi2Fatal the front end never calls the export library for that instance again: it only
  *      frees its own part (the FMI 2.0 host may call nothing but fmi2FreeInstance then). Its other
  *      defect, a library destructor that writes into a destroyed std::shared_ptr at exit, is
- *      defused in python_runtime.c.
+ *      defused in python_runtime.c;
+ *   6. keeps the instance's FMI 2.0 state machine (FMI 2.0.x, 4.2.4; the native FMUs keep the
+ *      same): a call not allowed in the current state is refused with fmi2Error and a message in
+ *      the native FMUs' words ("fmi2Terminate: not allowed in Initialization Mode"), never
+ *      forwarded. An initialisation call or fmi2Reset answering fmi2Error leaves the instance in
+ *      the error state, where only the getters, fmi2SetFMUstate, fmi2Reset and fmi2FreeInstance
+ *      are accepted; any other refusal (a bad value, a failed step) leaves the state as it was, so
+ *      the instance stays usable. The getters are served in every state (FMI 2.0 does not list
+ *      Instantiated): they only read. fmi2SetFMUstate brings back the state a saved state was
+ *      taken in (fmu_states.c).
+ *      Why: OMSimulator 3.0, after a failed fmi2ExitInitializationMode, goes through the instances
+ *      with fmi2Terminate and, when that answers fmi2OK, fmi2FreeInstance, stops at the first that
+ *      fails, and later runs the same round again with the handles it kept, freed ones included.
+ *      The slave accepted fmi2Terminate after the failure, so the Shaper was freed; the plant
+ *      refused; the second round's fmi2Terminate read the freed instance and jumped through a
+ *      garbage pointer in the export library (SIGSEGV). Now the failed instance refuses, so it is
+ *      not freed early, and fmi2FreeInstance keeps a pointer-sized Handle for the life of the
+ *      process: a call on a freed instance (an instance that did terminate, freed in the first
+ *      round) is refused with a message on stderr -- the host's logger environment may be gone
+ *      with it -- and a second fmi2FreeInstance does nothing.
  */
 #define _GNU_SOURCE
 #include <stdarg.h>
@@ -42,17 +61,6 @@
 #endif
 
 #define EXPORT __attribute__((visibility("default")))
-
-/* One instance: the export library's instance, the host's callbacks, and ours. */
-typedef struct {
-    fmi2Component component;
-    fmi2CallbackFunctions host;
-    fmi2CallbackFunctions ours;
-    fmi2Boolean logging_on;
-    int error_logged; /* set by our logger when the slave logs fmi2Error or worse */
-    int fatal;        /* the export library answered fmi2Fatal: its instance is released (see 5.) */
-    char name[256];
-} Shim;
 
 static void host_log(const fmi2CallbackFunctions* f, fmi2String name, fmi2Status status, const char* message)
 {
@@ -81,9 +89,8 @@ static void shim_logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Statu
     }
 }
 
-/* The status of a forwarded call: fmi2Error if the slave logged an error during it. A failed
- * step comes back from the export library as fmi2Discard; with an error logged it is an error. */
-static fmi2Status merge(Shim* s, fmi2Status status)
+/* A failed step comes back from the export library as fmi2Discard; with an error logged it is an error. */
+fmi2Status merge(Shim* s, fmi2Status status)
 {
     if (status == fmi2Fatal) s->fatal = 1;
     if (s->error_logged && status < fmi2Error) status = fmi2Error;
@@ -91,7 +98,7 @@ static fmi2Status merge(Shim* s, fmi2Status status)
     return status;
 }
 
-static fmi2Status refuse(Shim* s, const char* message)
+fmi2Status refuse(Shim* s, const char* message)
 {
     if (s != NULL) host_log(&s->host, s->name, fmi2Error, message);
     return fmi2Error;
@@ -112,12 +119,64 @@ static fmi2Status refuse_without_python(const char* name, const char* call, cons
     return fmi2Error;
 }
 
-#define BEGIN(c)                                                            \
-    Shim* s = (Shim*)(c);                                                   \
-    if (s == NULL || s->component == NULL) return fmi2Error;                \
-    if (s->fatal) return refuse_after_fatal(s);                             \
-    if (!runtime_alive()) return refuse_without_python(s->name, __func__, "refused with fmi2Error"); \
-    s->error_logged = 0
+static const char* mode_name(Mode mode)
+{
+    switch (mode) {
+    case INSTANTIATED: return "Instantiated";
+    case INITIALIZATION: return "Initialization Mode";
+    case STEP_COMPLETE: return "Step Complete";
+    case TERMINATED: return "Terminated";
+    default: return "Error";
+    }
+}
+
+Shim* admit(fmi2Component c, int allowed, const char* function, fmi2Status* refusal)
+{
+    Handle* h = (Handle*)c;
+    Shim* s = h != NULL ? h->shim : NULL;
+    char message[256];
+    *refusal = fmi2Error;
+    if (h == NULL) return NULL;
+    if (s == NULL) {
+        fprintf(stderr, "%s: not allowed after fmi2FreeInstance (the host called an instance of the FMU %s that it "
+            "had freed); refused with fmi2Error\n", function, SHIM_GUID);
+        fflush(stderr);
+        return NULL;
+    }
+    if (s->fatal) {
+        *refusal = refuse_after_fatal(s);
+        return NULL;
+    }
+    if (!runtime_alive()) {
+        *refusal = refuse_without_python(s->name, function, "refused with fmi2Error");
+        return NULL;
+    }
+    if (!(s->mode & allowed)) {
+        if (s->mode == ERROR_STATE) {
+            snprintf(message, sizeof(message), "%s: not allowed after an error (only the getters, fmi2SetFMUstate, "
+                "fmi2Reset and fmi2FreeInstance are)", function);
+        } else {
+            snprintf(message, sizeof(message), "%s: not allowed in %s", function, mode_name(s->mode));
+        }
+        *refusal = refuse(s, message);
+        return NULL;
+    }
+    s->error_logged = 0;
+    return s;
+}
+
+/* The status of an initialisation call, fmi2Terminate or fmi2Reset, and the state it leads to:
+ * `next` when it succeeded, the error state when it failed (fmi2Fatal: see 5.). */
+static fmi2Status advance(Shim* s, fmi2Status status, Mode next)
+{
+    status = merge(s, status);
+    if (status <= fmi2Warning) {
+        s->mode = next;
+    } else if (status < fmi2Fatal) {
+        s->mode = ERROR_STATE;
+    }
+    return status;
+}
 
 /* The export library reads <resources>/slavemodule.txt and crashes if it is missing: check first,
  * decoding the URI the way it does (file:// prefix, %20 as space). */
@@ -155,6 +214,7 @@ EXPORT fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, 
 {
     char why[2048] = "";
     char message[2400];
+    Handle* h;
     Shim* s;
     fmi2String name = instanceName != NULL ? instanceName : "";
     if (functions == NULL) return NULL;
@@ -187,8 +247,14 @@ EXPORT fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, 
         refuse_without_python(name, "fmi2Instantiate", "no instance (NULL)");
         return NULL;
     }
+    h = (Handle*)calloc(1, sizeof(Handle));
     s = (Shim*)calloc(1, sizeof(Shim));
-    if (s == NULL) return NULL;
+    if (h == NULL || s == NULL) {
+        free(h);
+        free(s);
+        return NULL;
+    }
+    s->mode = INSTANTIATED;
     s->host = *functions;
     s->ours = *functions;
     s->ours.logger = shim_logger;
@@ -200,15 +266,20 @@ EXPORT fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, 
     s->component = inner.Instantiate(name, fmuType, fmuGUID, fmuResourceLocation, &s->ours, visible, fmi2True);
     if (s->component == NULL) {
         free(s);
+        free(h);
         return NULL;
     }
-    return s;
+    h->shim = s;
+    return h;
 }
 
 EXPORT void fmi2FreeInstance(fmi2Component c)
 {
-    Shim* s = (Shim*)c;
+    Handle* h = (Handle*)c;
+    Shim* s = h != NULL ? h->shim : NULL;
+    /* The handle stays (see 6.): a second fmi2FreeInstance finds nothing left to free. */
     if (s == NULL) return;
+    h->shim = NULL;
     /* After fmi2Fatal the export library has released the instance's Python objects already; its
      * fmi2FreeInstance would release them again. Without an interpreter it cannot release them at
      * all. Either way its small C++ part is left allocated instead. */
@@ -224,56 +295,60 @@ EXPORT void fmi2FreeInstance(fmi2Component c)
 
 EXPORT fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nCategories, const fmi2String categories[])
 {
-    Shim* s = (Shim*)c;
+    Handle* h = (Handle*)c;
     (void)nCategories;
     (void)categories;
-    if (s == NULL) return fmi2Error;
-    s->logging_on = loggingOn;
+    if (h == NULL || h->shim == NULL) return fmi2Error;
+    h->shim->logging_on = loggingOn;
     return fmi2OK;
 }
 
 EXPORT fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fmi2Real tolerance,
     fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime)
 {
-    BEGIN(c);
-    return merge(s, inner.SetupExperiment(s->component, toleranceDefined, tolerance, startTime, stopTimeDefined, stopTime));
+    BEGIN(c, INSTANTIATED);
+    return advance(s, inner.SetupExperiment(s->component, toleranceDefined, tolerance, startTime, stopTimeDefined, stopTime),
+        INSTANTIATED);
 }
 
 EXPORT fmi2Status fmi2EnterInitializationMode(fmi2Component c)
 {
-    BEGIN(c);
-    return merge(s, inner.EnterInitializationMode(s->component));
+    BEGIN(c, INSTANTIATED);
+    return advance(s, inner.EnterInitializationMode(s->component), INITIALIZATION);
 }
 
 EXPORT fmi2Status fmi2ExitInitializationMode(fmi2Component c)
 {
-    BEGIN(c);
-    return merge(s, inner.ExitInitializationMode(s->component));
+    BEGIN(c, INITIALIZATION);
+    return advance(s, inner.ExitInitializationMode(s->component), STEP_COMPLETE);
 }
 
 EXPORT fmi2Status fmi2Terminate(fmi2Component c)
 {
-    BEGIN(c);
-    return merge(s, inner.Terminate(s->component));
+    BEGIN(c, STEP_COMPLETE);
+    return advance(s, inner.Terminate(s->component), TERMINATED);
 }
 
 EXPORT fmi2Status fmi2Reset(fmi2Component c)
 {
-    BEGIN(c);
-    return merge(s, inner.Reset(s->component));
+    BEGIN(c, ANY_MODE);
+    return advance(s, inner.Reset(s->component), INSTANTIATED);
 }
+
+/* The setters: before, in and after initialisation, not once terminated or after an error. */
+#define SETTABLE (INSTANTIATED | INITIALIZATION | STEP_COMPLETE)
 
 #define VALUES(Kind, Type)                                                                         \
     EXPORT fmi2Status fmi2Get##Kind(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, Type value[]) \
     {                                                                                              \
-        BEGIN(c);                                                                                  \
+        BEGIN(c, ANY_MODE);                                                                        \
         if (nvr == 0) return fmi2OK;                                                               \
         if (vr == NULL || value == NULL) return refuse(s, "fmi2Get" #Kind ": NULL array");          \
         return merge(s, inner.Get##Kind(s->component, vr, nvr, value));                            \
     }                                                                                              \
     EXPORT fmi2Status fmi2Set##Kind(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const Type value[]) \
     {                                                                                              \
-        BEGIN(c);                                                                                  \
+        BEGIN(c, SETTABLE);                                                                        \
         if (nvr == 0) return fmi2OK;                                                               \
         if (vr == NULL || value == NULL) return refuse(s, "fmi2Set" #Kind ": NULL array");          \
         return merge(s, inner.Set##Kind(s->component, vr, nvr, value));                            \
@@ -285,7 +360,7 @@ VALUES(Boolean, fmi2Boolean)
 
 EXPORT fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2String value[])
 {
-    BEGIN(c);
+    BEGIN(c, ANY_MODE);
     if (nvr == 0) return fmi2OK;
     if (vr == NULL || value == NULL) return refuse(s, "fmi2GetString: NULL array");
     return merge(s, inner.GetString(s->component, vr, nvr, value));
@@ -294,7 +369,7 @@ EXPORT fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], 
 EXPORT fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2String value[])
 {
     size_t i;
-    BEGIN(c);
+    BEGIN(c, SETTABLE);
     if (nvr == 0) return fmi2OK;
     if (vr == NULL || value == NULL) return refuse(s, "fmi2SetString: NULL array");
     for (i = 0; i < nvr; i++) {
@@ -303,118 +378,72 @@ EXPORT fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], 
     return merge(s, inner.SetString(s->component, vr, nvr, value));
 }
 
-EXPORT fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate* state)
+/* A function this FMU does not provide: fmi2Error, logged while the instance lives. */
+static fmi2Status unsupported(fmi2Component c, const char* message)
 {
-    BEGIN(c);
-    if (state == NULL) return refuse(s, "fmi2GetFMUstate: NULL state pointer");
-    /* FMI 2.0: a non-NULL *state is a state to update; ours are immutable Python objects, so the
-     * old one is freed and a new one returned. */
-    if (*state != NULL) {
-        inner.FreeFMUstate(s->component, state);
-        *state = NULL;
-    }
-    return merge(s, inner.GetFMUstate(s->component, state));
-}
-
-EXPORT fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate state)
-{
-    BEGIN(c);
-    if (state == NULL) return refuse(s, "fmi2SetFMUstate: NULL state");
-    return merge(s, inner.SetFMUstate(s->component, state));
-}
-
-EXPORT fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate* state)
-{
-    BEGIN(c);
-    if (state == NULL || *state == NULL) return fmi2OK;
-    return merge(s, inner.FreeFMUstate(s->component, state));
-}
-
-EXPORT fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate state, size_t* size)
-{
-    BEGIN(c);
-    if (state == NULL || size == NULL) return refuse(s, "fmi2SerializedFMUstateSize: NULL state or size");
-    return merge(s, inner.SerializedFMUstateSize(s->component, state, size));
-}
-
-EXPORT fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate state, fmi2Byte serializedState[], size_t size)
-{
-    size_t needed = 0;
-    fmi2Status status;
-    BEGIN(c);
-    if (state == NULL || serializedState == NULL) return refuse(s, "fmi2SerializeFMUstate: NULL state or buffer");
-    status = inner.SerializedFMUstateSize(s->component, state, &needed);
-    if (status > fmi2Warning) return merge(s, status);
-    if (size < needed) return refuse(s, "fmi2SerializeFMUstate: buffer smaller than fmi2SerializedFMUstateSize");
-    return merge(s, inner.SerializeFMUstate(s->component, state, serializedState, needed));
-}
-
-EXPORT fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedState[], size_t size, fmi2FMUstate* state)
-{
-    BEGIN(c);
-    if (serializedState == NULL || state == NULL) return refuse(s, "fmi2DeSerializeFMUstate: NULL buffer or state");
-    return merge(s, inner.DeSerializeFMUstate(s->component, serializedState, size, state));
+    Handle* h = (Handle*)c;
+    return refuse(h != NULL ? h->shim : NULL, message);
 }
 
 EXPORT fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference a[], size_t na,
     const fmi2ValueReference b[], size_t nb, const fmi2Real d[], fmi2Real r[])
 {
     (void)a; (void)na; (void)b; (void)nb; (void)d; (void)r;
-    return refuse((Shim*)c, "fmi2GetDirectionalDerivative is not provided (providesDirectionalDerivative=false)");
+    return unsupported(c, "fmi2GetDirectionalDerivative is not provided (providesDirectionalDerivative=false)");
 }
 
 EXPORT fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
     const fmi2Integer order[], const fmi2Real value[])
 {
     (void)vr; (void)nvr; (void)order; (void)value;
-    return refuse((Shim*)c, "fmi2SetRealInputDerivatives is not supported (canInterpolateInputs=false)");
+    return unsupported(c, "fmi2SetRealInputDerivatives is not supported (canInterpolateInputs=false)");
 }
 
 EXPORT fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
     const fmi2Integer order[], fmi2Real value[])
 {
     (void)vr; (void)nvr; (void)order; (void)value;
-    return refuse((Shim*)c, "fmi2GetRealOutputDerivatives is not supported (maxOutputDerivativeOrder=0)");
+    return unsupported(c, "fmi2GetRealOutputDerivatives is not supported (maxOutputDerivativeOrder=0)");
 }
 
 EXPORT fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2Real communicationStepSize,
     fmi2Boolean noSetFMUStatePriorToCurrentPoint)
 {
-    BEGIN(c);
+    BEGIN(c, STEP_COMPLETE);
     return merge(s, inner.DoStep(s->component, currentCommunicationPoint, communicationStepSize, noSetFMUStatePriorToCurrentPoint));
 }
 
 EXPORT fmi2Status fmi2CancelStep(fmi2Component c)
 {
-    return refuse((Shim*)c, "fmi2CancelStep: doStep never runs asynchronously here");
+    return unsupported(c, "fmi2CancelStep: doStep never runs asynchronously here");
 }
 
 EXPORT fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind kind, fmi2Status* value)
 {
     (void)kind; (void)value;
-    return refuse((Shim*)c, "fmi2GetStatus: doStep never runs asynchronously here");
+    return unsupported(c, "fmi2GetStatus: doStep never runs asynchronously here");
 }
 
 EXPORT fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind kind, fmi2Real* value)
 {
     (void)kind; (void)value;
-    return refuse((Shim*)c, "fmi2GetRealStatus: doStep never runs asynchronously here");
+    return unsupported(c, "fmi2GetRealStatus: doStep never runs asynchronously here");
 }
 
 EXPORT fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind kind, fmi2Integer* value)
 {
     (void)kind; (void)value;
-    return refuse((Shim*)c, "fmi2GetIntegerStatus: doStep never runs asynchronously here");
+    return unsupported(c, "fmi2GetIntegerStatus: doStep never runs asynchronously here");
 }
 
 EXPORT fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind kind, fmi2Boolean* value)
 {
     (void)kind; (void)value;
-    return refuse((Shim*)c, "fmi2GetBooleanStatus: doStep never runs asynchronously here");
+    return unsupported(c, "fmi2GetBooleanStatus: doStep never runs asynchronously here");
 }
 
 EXPORT fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind kind, fmi2String* value)
 {
     (void)kind; (void)value;
-    return refuse((Shim*)c, "fmi2GetStringStatus: doStep never runs asynchronously here");
+    return unsupported(c, "fmi2GetStringStatus: doStep never runs asynchronously here");
 }

@@ -1,7 +1,7 @@
 /*
- * The Python half of the FMU's C front end (fmi2_shim.c has the FMI entry points): finds libpython,
- * starts the interpreter, loads pythonfmu's export library, and keeps the interpreter alive for as
- * long as the process runs.
+ * The Python part of the FMU's C front end (fmi2_shim.c and fmu_states.c have the FMI entry
+ * points): finds libpython, starts the interpreter, loads pythonfmu's export library, and keeps
+ * the interpreter alive for as long as the process runs.
  *
  * libpython. pythonfmu's export library embeds Python but is not linked against libpython: in a
  * host with no Python of its own (ecos, libcosim, OMSimulator, Simulink, Dymola) its Py* symbols
