@@ -138,7 +138,12 @@ def refine_transcription(plant, grid: Transcription, n_samples: int = 2001,
     plant = as_plant(plant)
     distance, u_max, output = grid.distance, grid.u_max, grid.output
     x_f, u_f = rest_state(plant, distance, output)
-    levels, switches = _structure(grid.u, grid.T, u_max)
+    try:
+        levels, switches = _structure(grid.u, grid.T, u_max)
+    except ValueError as error:
+        raise ValueError(f"no time-optimal move found for distance = {distance!r} with u_max = {u_max!r} on "
+                         f"plant {plant.name!r} ({error}); a move that lasts many thousand or a tiny fraction "
+                         f"of the plant's mode periods is out of the transcription's numerical range") from None
     command = Command((0.0, *switches, grid.T), tuple(levels), u_f)
     _, states = simulate(plant, command, np.linspace(0.0, grid.T, 201))
     scale = _peak_scale(states, x_f, distance)

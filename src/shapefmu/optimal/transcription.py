@@ -106,6 +106,18 @@ def lp_transcription(plant, distance: float, u_max: float | None = None, n_inter
     plant, x_f, _ = _checked_problem(plant, distance, u_max, output)
     A, B = plant.A, plant.B[:, :1]
     N = max(int(n_intervals), 50 * plant.n_states)
+    try:
+        return _bisect_move_time(A, B, x_f, u_max, N, rel_tol, distance, _output_index(plant, output))
+    except ValueError as error:
+        # A move far longer or shorter than the plant's modes is out of the LP's numerical reach:
+        # name the two values that set the move, not only the solver's complaint.
+        raise ValueError(f"no time-optimal move found for distance = {distance!r} with u_max = {u_max!r} on "
+                         f"plant {plant.name!r} ({error}); a move that lasts many thousand or a tiny fraction "
+                         f"of the plant's mode periods is out of the transcription's numerical range") from None
+
+
+def _bisect_move_time(A, B, x_f, u_max, N, rel_tol, distance, output_index) -> Transcription:
+    """The bisection on T of ``lp_transcription`` (its docstring)."""
     hi, _ = _bracket(A, B, x_f, u_max, min(N, 60))
     peak, u = _min_norm_grid_input(A, B, x_f, hi, N)
     solves = 1
@@ -126,8 +138,7 @@ def lp_transcription(plant, distance: float, u_max: float | None = None, n_inter
         else:
             lo = mid
     _, u = _min_norm_grid_input(A, B, x_f, hi, N)
-    return Transcription(float(hi), np.clip(u, -u_max, u_max), N, solves, distance, u_max,
-                         _output_index(plant, output))
+    return Transcription(float(hi), np.clip(u, -u_max, u_max), N, solves, distance, u_max, output_index)
 
 
 # ---------------------------------------------------------------------------------------------
