@@ -49,7 +49,7 @@ def run_host(c_host: Path, fmus: list[list[str]], *options, env=None, timeout=30
     command = [str(c_host), *map(str, options)]
     for arguments in fmus:
         command += arguments
-    return subprocess.run(command, capture_output=True, text=True, timeout=timeout, env=env)
+    return subprocess.run(command, capture_output=True, text=True, errors="replace", timeout=timeout, env=env)
 
 
 def host_rows(csv: Path) -> dict:

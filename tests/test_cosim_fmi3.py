@@ -95,6 +95,32 @@ def test_an_fmi3_parameter_error_names_the_component_and_the_call(fmus):
         simulate(System().add("plant", fmus["plant3"], {"f[1]": -1.0}), 1e-4, 1e-5)
 
 
+def test_calls_on_a_freed_fmi3_plant_are_refused_and_a_second_free_does_nothing(fmus, capfd):
+    # What OMSimulator does to FMI 2.0 instances after a failed initialisation (README, OMSimulator):
+    # the FMI 3.0 wrapper keeps the same registry of live instances as the generic FMI 2.0 layer.
+    from fmpy import extract, read_model_description
+    from fmpy.fmi1 import FMICallException
+    from fmpy.fmi3 import FMU3Slave
+
+    md = read_model_description(str(fmus["plant3"]))
+    slave = FMU3Slave(guid=md.guid, unzipDirectory=extract(str(fmus["plant3"])),
+                      modelIdentifier=md.coSimulation.modelIdentifier, instanceName="freed")
+    slave.instantiate()
+    slave.enterInitializationMode()
+    slave.exitInitializationMode()
+    slave.doStep(0.0, 1e-4)
+    slave.fmi3FreeInstance(slave.component)
+    for call in (slave.terminate, lambda: slave.doStep(1e-4, 1e-4), lambda: slave.getFloat64([0])):
+        with pytest.raises(FMICallException) as refused:
+            call()
+        assert refused.value.status == 3  # fmi3Error
+    slave.fmi3FreeInstance(slave.component)  # a second free does nothing
+    slave.freeLibrary()
+    stderr = capfd.readouterr().err
+    for function in ("fmi3Terminate", "fmi3DoStep", "fmi3GetFloat64"):
+        assert stderr.count(f"shapefmu FMU: {function} called on an instance that is not live (already freed?)") == 1
+
+
 # ---------------------------------------------------------------------------------------------
 # every type across versions: TypedStair (FMI 2.0) and TypedStair3 (FMI 3.0), one model
 

@@ -69,24 +69,57 @@ def test_omsimulators_teardown_after_a_failed_initialisation_refuses_terminate_a
     assert result.stderr.count(f"Shaper_0: fmi2Terminate: {AFTER_AN_ERROR}") == 2
 
 
-def test_a_call_on_an_instance_the_host_freed_is_refused_not_a_use_after_free(c_host, extracted, bad_zeta):
-    # The ShapeFilter initialises, so OMSimulator's first round terminates and frees it before the
-    # Shaper refuses; the second round then calls fmi2Terminate on the freed ShapeFilter, and
-    # deleting the model frees it a second time.
-    fmus = [extracted["ShapeFilter"], extracted["Shaper"] + bad_zeta]
+NOT_LIVE = "shapefmu FMU: {} called on an instance that is not live (already freed?)"
+
+
+# The first FMU initialises, so OMSimulator's first round terminates and frees it before the
+# Shaper refuses; the second round then calls fmi2Terminate on the freed instance, and deleting the
+# model frees it a second time. The pythonfmu front end leaves a handle behind on free; the native
+# plant (generic C layer) keeps a registry of live instances. With the plant first (the "zplant"
+# system of README.md) this crashed: use after free in the plant (-11 or -6).
+@pytest.mark.parametrize("first, instance, refusal", [
+    ("ShapeFilter", "ShapeFilter_0", "fmi2Terminate: not allowed after fmi2FreeInstance"),
+    ("plant", "disk_drive_0", NOT_LIVE.format("fmi2Terminate")),
+])
+def test_a_call_on_an_instance_the_host_freed_is_refused_not_a_use_after_free(
+    c_host, extracted, bad_zeta, first, instance, refusal
+):
+    fmus = [extracted[first], extracted["Shaper"] + bad_zeta]
     result = run_host(c_host, fmus, *RUN, "--on-error", "omsimulator")
     assert result.returncode == 0, result.stdout + result.stderr[-3000:]
     assert result.stdout.splitlines() == [
         "failed fmi2ExitInitializationMode 3",
-        "terminate ShapeFilter_0 0",
-        "free ShapeFilter_0",
+        f"terminate {instance} 0",
+        f"free {instance}",
         "terminate Shaper_0 3",
-        "terminate ShapeFilter_0 3",  # on the freed instance: refused
-        "free ShapeFilter_0",  # a second fmi2FreeInstance: nothing left to free
+        f"terminate {instance} 3",  # on the freed instance: refused
+        f"free {instance}",  # a second fmi2FreeInstance: nothing left to free
         "free Shaper_0",
         "done",
     ]
-    assert result.stderr.count("fmi2Terminate: not allowed after fmi2FreeInstance") == 1
+    assert result.stderr.count(refusal) == 1
+
+
+@pytest.fixture(scope="module")
+def native_shaper(tmp_path_factory):
+    """``--fmu`` arguments of a native (C) ZVD Shaper."""
+    from shapefmu.fmi.native.sampled import build_native_fmu
+
+    folder = tmp_path_factory.mktemp("native_order")
+    fmu = build_native_fmu("Shaper", folder / "NativeShaper.fmu", kind="zvd", **{"f[1]": 10.0, "zeta[1]": 0.05})
+    return fmu_arguments(fmu, folder / "NativeShaper")
+
+
+@pytest.mark.parametrize("which", ["plant", "native Shaper"])
+def test_calls_on_a_freed_native_instance_are_refused_and_a_second_free_does_nothing(
+    c_host, extracted, native_shaper, which
+):
+    arguments = extracted["plant"] if which == "plant" else native_shaper
+    calls = ["setup", "enter", "exit", "step", "free", "terminate", "step", "get", "reset", "free", "setup"]
+    statuses, stderr = _calls(c_host, arguments, calls)  # exits 0: no use after free
+    assert statuses == [0, 0, 0, 0, "-", 3, 3, 3, 3, "-", 3]
+    for function in ("fmi2Terminate", "fmi2DoStep", "fmi2GetReal", "fmi2Reset", "fmi2SetupExperiment"):
+        assert stderr.count(NOT_LIVE.format(function)) == 1, stderr
 
 
 def test_terminate_after_a_failed_exit_initialization_is_refused_and_free_instance_works(c_host, extracted, bad_zeta):

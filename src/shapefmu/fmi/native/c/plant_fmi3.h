@@ -6,6 +6,7 @@
 #include <stddef.h>
 
 #include "fmi3Functions.h"
+#include "fmu_registry.h"
 
 typedef enum {
     INSTANTIATED = 1 << 0, INITIALIZATION = 1 << 1, EVENT_MODE = 1 << 2, CONTINUOUS_TIME = 1 << 3,
@@ -35,10 +36,10 @@ typedef struct {
 fmi3Status plant_fmi3_fail(Plant *p, const char *format, ...);
 #define fail plant_fmi3_fail
 
-/* Guard of every entry point: a live instance in one of the allowed modes. */
+/* Guard of every entry point: a live instance (fmu_registry.h) in one of the allowed modes. */
 #define ENTER(instance, allowed, function)                                                          \
     Plant *p = (Plant *)(instance);                                                                 \
-    if (p == NULL) return fmi3Error;                                                                \
+    if (!fmu_registry_live(p, function)) return fmi3Error;                                          \
     if (!(p->mode & (allowed))) return fail(p, "%s: not allowed in the current state (mode %d)", function, (int)p->mode)
 
 #endif
