@@ -76,6 +76,7 @@ MOVES = [
     (["optimal", DISK, "--distance", "0.05", "--csv", "out/u.json"], "the signal table name must end in .csv"),
     (["optimal", DISK, "--distance", "0.05", "--plot", "."], "'.': the plot name must end in"),
     (["optimal", DISK, "--distance", "1e-30"], "no time-optimal move found for distance = 1e-30 with u_max = 11.0"),
+    (["stos", DISK, "--distance", "1e-300"], "no time-optimal move found for distance = 1e-300"),
     (["optimal", DISK, "--distance", "0.05", "--u-max", "1e30"],
      "no time-optimal move found for distance = 0.05 with u_max = 1e+30"),
     (["stos", DISK, "--distance", "0.05", "--ts", "0"], "Ts must be > 0, got 0.0"),

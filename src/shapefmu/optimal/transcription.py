@@ -57,8 +57,12 @@ def _min_norm_grid_input(A, B, x_f, T, N):
     cost[-1] = 1.0
     eye = np.eye(N)
     A_ub = np.block([[eye, -np.ones((N, 1))], [-eye, -np.ones((N, 1))]])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        b_eq = (U.T @ x_f) / S
+    if not np.all(np.isfinite(b_eq)):  # T so short (or x_f so small) that Gamma underflows
+        raise ValueError(f"the grid's reachability map is singular at T = {T:.3g} s")
     result = linprog(cost, A_ub=A_ub, b_ub=np.zeros(2 * N), A_eq=np.hstack([Vt, np.zeros((n, 1))]),
-                     b_eq=(U.T @ x_f) / S, bounds=[(None, None)] * N + [(0.0, None)], method="highs")
+                     b_eq=b_eq, bounds=[(None, None)] * N + [(0.0, None)], method="highs")
     if result.status != 0:
         return math.inf, None
     return float(result.x[-1]), result.x[:N]
