@@ -54,6 +54,24 @@ def test_shaper_to_plant_jacobi_equals_libcosim_and_ecos(shaper_fmu_2khz, disk_d
     np.testing.assert_allclose(ours, run_ecos(ssp, h, n, variables), rtol=0, atol=1e-9)
 
 
+
+def test_two_instances_of_one_native_fmu_run_in_ecos_as_in_our_master(disk_drive_fmu, tmp_path, capfd):
+    # ecos loads one copy of an FMU's library per instance and may call an instance through another
+    # copy's functions: the instances' liveness must not be kept per library (it once was, and every
+    # call of the second plant was refused with "not live").
+    system = (System("chain").add("first", disk_drive_fmu, {"voltage": VOLTS}).add("second", disk_drive_fmu)
+              .connect("first.position", "second.voltage"))
+    ssp = system.write_ssp(tmp_path / "chain.ssp")
+    variables = ["first.position", "second.position"]
+    h, n = 1e-6, 300
+    ours = simulate(ssp, n * h, h, algorithm="jacobi", record=variables)
+    ours = np.column_stack([ours[v] for v in variables])
+    theirs = run_ecos(ssp, h, n, variables)
+    assert np.ptp(ours[:, 1]) > 0.0
+    np.testing.assert_allclose(ours, theirs, rtol=0, atol=1e-12 * np.max(np.abs(ours)))
+    assert "not live" not in capfd.readouterr().err
+
+
 def exact_step_response(t: np.ndarray, volts: float) -> np.ndarray:
     """Outputs of the disk drive under a constant input, by the augmented matrix exponential."""
     system = load(MODEL).to_statespace()

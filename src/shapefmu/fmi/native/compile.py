@@ -47,7 +47,7 @@ class Platform:
 
 def linux64() -> Platform:
     return Platform("linux64", os.environ.get("CC", "gcc"),
-                    ("-O2", "-shared", "-fPIC", "-std=c99", "-fvisibility=hidden", "-pthread"), ".so")
+                    ("-O2", "-shared", "-fPIC", "-std=c99", "-fvisibility=hidden"), ".so")
 
 
 def win64() -> Platform | None:

@@ -1,11 +1,14 @@
-/* The process-wide registry of live instances of one native FMU (its shared library).
+/* Whether an instance pointer is a live instance of a native FMU.
  *
  * Some hosts call an instance after they freed it: OMSimulator 3.0, after a failed initialisation,
  * terminates and frees its instances in one round and then runs the round again with the handles it
- * kept. Every entry point therefore asks whether its instance pointer is live before dereferencing
- * it. A pointer is live from fmu_registry_add (on instantiation) to fmu_registry_remove (on free).
- * The check first compares with the pointer last found live (one load: the hot path of doStep,
- * get and set), then scans the registry under a lock.
+ * kept. Every entry point therefore asks whether its instance is live before using it. Each instance
+ * struct begins with a tag (unsigned long long live_tag), set to a live value on instantiation and
+ * overwritten on free just before the memory is released; a freed chunk then holds the dead value or
+ * the allocator's own bookkeeping, never the live value, unless it was reused for a new instance.
+ * The tag lives in the instance, not in a table of this library: ecos loads one copy of an FMU's
+ * library per instance and calls an instance through another copy's functions, so a per-library
+ * table would refuse live instances there.
  */
 #ifndef FMU_REGISTRY_H
 #define FMU_REGISTRY_H

@@ -17,6 +17,7 @@ typedef enum {
 #define SETTABLE (INSTANTIATED | INITIALIZATION | RUNNING)
 
 typedef struct {
+    unsigned long long live_tag;  /* first: fmu_registry.h reads it through the bare instance pointer */
     int model_exchange;
     Mode mode;
     char *name;
