@@ -24,8 +24,8 @@ from shapefmu.runtime.checks import check_size
 WRAPPER_SOURCES = (*LAYER_SOURCES, "plant_fmi2.c", "plant_expm.c")
 WRAPPER_HEADERS = (*LAYER_HEADERS, "plant_model.h", "plant_expm.h")
 # The FMI 3.0 target: the same model part and numerics behind an FMI 3.0 wrapper.
-WRAPPER_SOURCES_3 = ("plant_fmi3.c", "plant_fmi3_refused.c", "plant_expm.c", "fmu_registry.c")
-WRAPPER_HEADERS_3 = ("plant_model.h", "plant_expm.h", "plant_fmi3.h", "fmu_registry.h", "fmi3Functions.h",
+WRAPPER_SOURCES_3 = ("plant_fmi3.c", "plant_fmi3_refused.c", "plant_expm.c", "fmu_liveness.c")
+WRAPPER_HEADERS_3 = ("plant_model.h", "plant_expm.h", "plant_fmi3.h", "fmu_liveness.h", "fmi3Functions.h",
                      "fmi3FunctionTypes.h", "fmi3PlatformTypes.h")
 FMI_VERSIONS = ("2.0", "3.0")
 

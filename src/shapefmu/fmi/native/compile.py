@@ -30,8 +30,8 @@ from importlib import resources
 from pathlib import Path
 
 # The generic FMI 2.0 layer and the FMI headers, shipped in every native FMU.
-LAYER_SOURCES = ("fmi2_layer.c", "fmi2_layer_state.c", "fmi2_layer_me.c", "fmu_registry.c")
-LAYER_HEADERS = ("fmi2_model.h", "fmi2_layer.h", "fmu_registry.h", "fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")
+LAYER_SOURCES = ("fmi2_layer.c", "fmi2_layer_state.c", "fmi2_layer_me.c", "fmu_liveness.c")
+LAYER_HEADERS = ("fmi2_model.h", "fmi2_layer.h", "fmu_liveness.h", "fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")
 MINGW = "x86_64-w64-mingw32-gcc"
 
 

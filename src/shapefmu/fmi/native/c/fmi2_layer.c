@@ -126,21 +126,21 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     inst->booleans = fmi2_allocate(inst, info.n_boolean, sizeof(int));
     inst->strings = fmi2_allocate(inst, info.n_string, FMI2_STRING_CAPACITY + 1);
     if (inst->name == NULL || (info.n_real && !inst->reals) || (info.n_integer && !inst->integers)
-        || (info.n_boolean && !inst->booleans) || (info.n_string && !inst->strings) || model_instantiate(inst) != 0
-        || fmu_registry_add(inst) != 0) {
+        || (info.n_boolean && !inst->booleans) || (info.n_string && !inst->strings) || model_instantiate(inst) != 0) {
         log_instantiation_error(functions, instanceName, "out of memory");
         free_instance(inst);
         return NULL;
     }
     strcpy(inst->name, instanceName);
+    fmu_mark_live(inst);
     fmi2_debug(inst, "fmi2Instantiate: %zu Real, %zu Integer, %zu Boolean, %zu String variables", info.n_real,
                info.n_integer, info.n_boolean, info.n_string);
     return inst;
 }
 
 void fmi2FreeInstance(fmi2Component c) {
-    /* An instance freed already (or never made here) is not touched: see fmu_registry.h. */
-    if (fmu_registry_remove(c)) free_instance((Fmi2Instance *)c);
+    /* An instance freed already (or never made here) is not touched: see fmu_liveness.h. */
+    if (fmu_mark_freed(c)) free_instance((Fmi2Instance *)c);
 }
 
 const char *fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }

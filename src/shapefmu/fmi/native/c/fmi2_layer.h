@@ -4,17 +4,17 @@
 #define FMI2_LAYER_H
 
 #include "fmi2_model.h"
-#include "fmu_registry.h"
+#include "fmu_liveness.h"
 
 #define ANY_MODE (FMI2_INSTANTIATED | FMI2_INITIALIZATION | FMI2_EVENT_MODE | FMI2_CONTINUOUS_TIME \
                   | FMI2_STEP_COMPLETE | FMI2_TERMINATED | FMI2_ERROR_STATE)
 #define AFTER_INSTANTIATION (ANY_MODE & ~FMI2_INSTANTIATED)
 #define RUNNING (FMI2_EVENT_MODE | FMI2_CONTINUOUS_TIME | FMI2_STEP_COMPLETE)
 
-/* Guard of every entry point: a live instance (fmu_registry.h) in one of the allowed modes. */
+/* Guard of every entry point: a live instance (fmu_liveness.h) in one of the allowed modes. */
 #define REQUIRE(instance, allowed, function)                                                        \
     Fmi2Instance *inst = (Fmi2Instance *)(instance);                                                \
-    if (!fmu_registry_live(inst, function)) return fmi2Error;                                       \
+    if (!fmu_is_live(inst, function)) return fmi2Error;                                       \
     if (!(inst->mode & (allowed)))                                                                  \
         return fmi2_fail(inst, "%s: not allowed in %s", function, fmi2_mode_name(inst->mode));      \
     if (inst->logging_on) fmi2_debug(inst, "%s", function)

@@ -52,7 +52,7 @@ typedef struct {
 } Fmi2ModelInfo;
 
 typedef struct {
-    unsigned long long live_tag;  /* first: fmu_registry.h reads it through the bare instance pointer */
+    unsigned long long live_tag;  /* first: fmu_liveness.h reads it through the bare instance pointer */
     Fmi2ModelInfo info;
     fmi2Type type;
     Fmi2Mode mode;

@@ -208,14 +208,14 @@ static fmi3Instance instantiate(fmi3String name, fmi3String token, int model_exc
     p->k4 = calloc(n + 1, sizeof(double));
     p->stage = calloc(n + 1, sizeof(double));
     if (!(p->name && p->v && p->A && p->B && p->C && p->D && p->work && p->augmented && p->exponential && p->Phi
-          && p->Gamma && p->expm_work && p->expm_iwork && p->next && p->k1 && p->k2 && p->k3 && p->k4 && p->stage)
-        || fmu_registry_add(p) != 0) {
+          && p->Gamma && p->expm_work && p->expm_iwork && p->next && p->k1 && p->k2 && p->k3 && p->k4 && p->stage)) {
         if (log != NULL) log(environment, fmi3Error, "logStatusError", "out of memory");
         free_plant(p);
         return NULL;
     }
     strcpy(p->name, name);
     start_values(p);
+    fmu_mark_live(p);
     return p;
 }
 
@@ -249,8 +249,8 @@ fmi3Instance fmi3InstantiateScheduledExecution(fmi3String instanceName, fmi3Stri
 }
 
 void fmi3FreeInstance(fmi3Instance instance) {
-    /* An instance freed already (or never made here) is not touched: see fmu_registry.h. */
-    if (fmu_registry_remove(instance)) free_plant((Plant *)instance);
+    /* An instance freed already (or never made here) is not touched: see fmu_liveness.h. */
+    if (fmu_mark_freed(instance)) free_plant((Plant *)instance);
 }
 
 const char *fmi3GetVersion(void) { return fmi3Version; }

@@ -6,7 +6,7 @@
 #include <stddef.h>
 
 #include "fmi3Functions.h"
-#include "fmu_registry.h"
+#include "fmu_liveness.h"
 
 typedef enum {
     INSTANTIATED = 1 << 0, INITIALIZATION = 1 << 1, EVENT_MODE = 1 << 2, CONTINUOUS_TIME = 1 << 3,
@@ -17,7 +17,7 @@ typedef enum {
 #define SETTABLE (INSTANTIATED | INITIALIZATION | RUNNING)
 
 typedef struct {
-    unsigned long long live_tag;  /* first: fmu_registry.h reads it through the bare instance pointer */
+    unsigned long long live_tag;  /* first: fmu_liveness.h reads it through the bare instance pointer */
     int model_exchange;
     Mode mode;
     char *name;
@@ -37,10 +37,10 @@ typedef struct {
 fmi3Status plant_fmi3_fail(Plant *p, const char *format, ...);
 #define fail plant_fmi3_fail
 
-/* Guard of every entry point: a live instance (fmu_registry.h) in one of the allowed modes. */
+/* Guard of every entry point: a live instance (fmu_liveness.h) in one of the allowed modes. */
 #define ENTER(instance, allowed, function)                                                          \
     Plant *p = (Plant *)(instance);                                                                 \
-    if (!fmu_registry_live(p, function)) return fmi3Error;                                          \
+    if (!fmu_is_live(p, function)) return fmi3Error;                                          \
     if (!(p->mode & (allowed))) return fail(p, "%s: not allowed in the current state (mode %d)", function, (int)p->mode)
 
 #endif

@@ -10,17 +10,18 @@
  * library per instance and calls an instance through another copy's functions, so a per-library
  * table would refuse live instances there.
  */
-#ifndef FMU_REGISTRY_H
-#define FMU_REGISTRY_H
+#ifndef FMU_LIVENESS_H
+#define FMU_LIVENESS_H
 
-/* Register a new instance: 0, or -1 when the registry cannot grow (out of memory). */
-int fmu_registry_add(const void *instance);
+/* Mark a new instance live (its first member is the tag). */
+void fmu_mark_live(void *instance);
 
-/* Unregister an instance: 1 if it was live, 0 if it was not (already freed or never made). */
-int fmu_registry_remove(const void *instance);
+/* Mark an instance freed, just before its memory is released: 1 if it was live, 0 if it was not
+ * (already freed or never made). */
+int fmu_mark_freed(const void *instance);
 
 /* 1 if instance is live; else 0, after one line on stderr naming function (the instance's logger
  * may be gone with it). */
-int fmu_registry_live(const void *instance, const char *function);
+int fmu_is_live(const void *instance, const char *function);
 
 #endif
