@@ -2,14 +2,22 @@
 
 ``build_typed_stair(directory)`` builds tests/fmus_c/typed_stair.c (FMI 2.0 Model Exchange +
 Co-Simulation, a variable of every FMI 2.0 type, a termination request at ``stop_at``) with the
-modelDescription.xml below; ``build_typed_stair3`` the same model as an FMI 3.0 FMU
-(typed_stair3.c: Float64, Int32, Enumeration, Boolean and String). The FMI headers are the ones
-the plant FMUs ship.
+modelDescription.xml written from the table below; ``build_typed_stair3`` the same model as an FMI 3.0
+FMU (typed_stair3.c: Float64, every integer type, Enumeration, Boolean and String). The FMI headers
+are the ones the plant FMUs ship.
+
+Variants behave as other exporters' FMUs do (typed_stair_model.h says how, from the standards' text):
+``quirks=("PROVISIONAL",)`` keeps a step called with noSetFMUStatePriorToCurrentPoint = false
+provisional, ``("RESET_IN_SETUP",)`` resets every value in fmi2SetupExperiment; ``source=True`` declares
+only the parameters and the outputs that need no input, as a source such as the Reference FMU Stair;
+``dependencies=False`` leaves the ``dependencies`` attribute out of the ModelStructure, as pythonfmu
+and the Reference FMUs do; ``missing_library`` links the binary against a library the FMU does not ship.
 """
 
 from __future__ import annotations
 
 import subprocess
+import tempfile
 import zipfile
 from importlib import resources
 from pathlib import Path
@@ -18,60 +26,82 @@ import fmpy
 
 HERE = Path(__file__).resolve().parent / "fmus_c"
 GUID = "{6f1c2b7e-typed-stair-0001}"
+TOKEN3 = "{6f1c2b7e-typed-stair-0003}"
 
-_TYPED_STAIR_VARIABLES = """
-    <ScalarVariable name="x_in" valueReference="0" causality="input" variability="continuous"><Real start="0"/></ScalarVariable>
-    <ScalarVariable name="x_out" valueReference="1" causality="output" variability="continuous"><Real/></ScalarVariable>
-    <ScalarVariable name="period" valueReference="2" causality="parameter" variability="fixed" initial="exact"><Real start="1"/></ScalarVariable>
-    <ScalarVariable name="stop_at" valueReference="3" causality="parameter" variability="fixed" initial="exact"><Real start="1e+300"/></ScalarVariable>
-    <ScalarVariable name="level" valueReference="4" causality="output" variability="continuous" initial="exact"><Real start="0"/></ScalarVariable>
-    <ScalarVariable name="der(level)" valueReference="5" causality="local" variability="continuous"><Real derivative="5"/></ScalarVariable>
-    <ScalarVariable name="increment" valueReference="0" causality="parameter" variability="fixed" initial="exact"><Integer start="1"/></ScalarVariable>
-    <ScalarVariable name="n_in" valueReference="1" causality="input" variability="discrete"><Integer start="0"/></ScalarVariable>
-    <ScalarVariable name="counter" valueReference="2" causality="output" variability="discrete"><Integer/></ScalarVariable>
-    <ScalarVariable name="n_out" valueReference="3" causality="output" variability="discrete"><Integer/></ScalarVariable>
-    <ScalarVariable name="mode" valueReference="4" causality="parameter" variability="fixed" initial="exact"><Enumeration declaredType="Direction" start="1"/></ScalarVariable>
-    <ScalarVariable name="e_in" valueReference="5" causality="input" variability="discrete"><Enumeration declaredType="Direction" start="1"/></ScalarVariable>
-    <ScalarVariable name="e_out" valueReference="6" causality="output" variability="discrete"><Enumeration declaredType="Direction"/></ScalarVariable>
-    <ScalarVariable name="negate" valueReference="0" causality="parameter" variability="fixed" initial="exact"><Boolean start="false"/></ScalarVariable>
-    <ScalarVariable name="b_in" valueReference="1" causality="input" variability="discrete"><Boolean start="false"/></ScalarVariable>
-    <ScalarVariable name="b_out" valueReference="2" causality="output" variability="discrete"><Boolean/></ScalarVariable>
-    <ScalarVariable name="label" valueReference="0" causality="parameter" variability="fixed" initial="exact"><String start="stair"/></ScalarVariable>
-    <ScalarVariable name="s_in" valueReference="1" causality="input" variability="discrete"><String start=""/></ScalarVariable>
-    <ScalarVariable name="s_out" valueReference="2" causality="output" variability="discrete"><String/></ScalarVariable>
-"""
-# ModelStructure indices: 1-based positions in the list above.
-_TYPED_STAIR_STRUCTURE = """
-    <Outputs>
-      <Unknown index="2" dependencies="1"/>
-      <Unknown index="5" dependencies=""/>
-      <Unknown index="9" dependencies=""/>
-      <Unknown index="10" dependencies="8"/>
-      <Unknown index="13" dependencies="12"/>
-      <Unknown index="16" dependencies="15"/>
-      <Unknown index="19" dependencies="18"/>
-    </Outputs>
-    <Derivatives>
-      <Unknown index="6" dependencies="1"/>
-    </Derivatives>
-    <InitialUnknowns>
-      <Unknown index="2" dependencies="1"/>
-      <Unknown index="6" dependencies="1"/>
-      <Unknown index="9" dependencies=""/>
-      <Unknown index="10" dependencies="8"/>
-      <Unknown index="13" dependencies="12"/>
-      <Unknown index="16" dependencies="15"/>
-      <Unknown index="19" dependencies="18"/>
-    </InitialUnknowns>
-"""
+# (name, FMI 2.0 type, value reference, causality, variability, start, inputs it depends on); the
+# ModelVariables list in this order (the indices of the FMI 2.0 ModelStructure are positions in it).
+_VARIABLES = [
+    ("x_in", "Real", 0, "input", "continuous", "0", None),
+    ("x_out", "Real", 1, "output", "continuous", None, ("x_in",)),
+    ("period", "Real", 2, "parameter", "fixed", "1", None),
+    ("stop_at", "Real", 3, "parameter", "fixed", "1e+300", None),
+    ("level", "Real", 4, "output", "continuous", "0", ()),
+    ("der(level)", "Real", 5, "local", "continuous", None, ("x_in",)),
+    ("increment", "Integer", 0, "parameter", "fixed", "1", None),
+    ("n_in", "Integer", 1, "input", "discrete", "0", None),
+    ("counter", "Integer", 2, "output", "discrete", None, ()),
+    ("n_out", "Integer", 3, "output", "discrete", None, ("n_in",)),
+    ("mode", "Enumeration", 4, "parameter", "fixed", "1", None),
+    ("e_in", "Enumeration", 5, "input", "discrete", "1", None),
+    ("e_out", "Enumeration", 6, "output", "discrete", None, ("e_in",)),
+    ("negate", "Boolean", 0, "parameter", "fixed", "false", None),
+    ("b_in", "Boolean", 1, "input", "discrete", "false", None),
+    ("b_out", "Boolean", 2, "output", "discrete", None, ("b_in",)),
+    ("label", "String", 0, "parameter", "fixed", "stair", None),
+    ("s_in", "String", 1, "input", "discrete", "", None),
+    ("s_out", "String", 2, "output", "discrete", None, ("s_in",)),
+    ("r_in", "Real", 6, "input", "discrete", "0", None),
+    ("r_out", "Real", 7, "output", "discrete", None, ("r_in",)),
+    ("steps", "Integer", 7, "output", "discrete", None, ()),
+    ("provisional_steps", "Integer", 8, "output", "discrete", None, ()),
+]
+# FMI 3.0: unique value references (typed_stair3.c), and the integer types FMI 2.0 does not have.
+_VR3 = {"Real": lambda vr: 1 + vr, "Integer": lambda vr: 10 + vr, "Enumeration": lambda vr: 10 + vr,
+        "Boolean": lambda vr: 20 + vr, "String": lambda vr: 30 + vr}
+_TYPE3 = {"Real": "Float64", "Integer": "Int32", "Enumeration": "Enumeration", "Boolean": "Boolean", "String": "String"}
+WIDE_TYPES = ("Int8", "UInt8", "Int16", "UInt16", "UInt32", "Int64", "UInt64")  # the order of W_INT8 ... W_UINT64
+_WIDE_VARIABLES = [row for w, t in enumerate(WIDE_TYPES) for row in (
+    (f"{t.lower()}_in", t, 40 + 2 * w, "input", "discrete", "0", None),
+    (f"{t.lower()}_out", t, 41 + 2 * w, "output", "discrete", None, (f"{t.lower()}_in",)))]
+# A source declares no input: only what does not depend on one (x_out = counter while x_in stays 0).
+_SOURCE = ("x_out", "period", "stop_at", "increment", "counter")
 
 
-def typed_stair_description(identifier: str) -> str:
+def _variables(source: bool, fmi3: bool) -> list[tuple]:
+    rows = _VARIABLES + (_WIDE_VARIABLES if fmi3 else [])
+    if source:
+        rows = [(*row[:6], () if row[6] is not None else None) for row in rows if row[0] in _SOURCE]
+    return rows
+
+
+def _dependencies(row, position, dependencies: bool) -> str:
+    if not dependencies:
+        return ""  # the standard's default: the output depends on every input
+    return f' dependencies="{" ".join(str(position[name]) for name in row[6])}"'
+
+
+def typed_stair_description(identifier: str, *, source: bool = False, dependencies: bool = True) -> str:
+    rows = _variables(source, fmi3=False)
+    position = {row[0]: i + 1 for i, row in enumerate(rows)}
+    variables = []
+    for name, kind, vr, causality, variability, start, _ in rows:
+        initial = ' initial="exact"' if causality == "parameter" or name == "level" else ""
+        declared = ' declaredType="Direction"' if kind == "Enumeration" else ""
+        value = f' start="{start}"' if start is not None else ""
+        derivative = ' derivative="5"' if name == "der(level)" else ""
+        variables.append(f'    <ScalarVariable name="{name}" valueReference="{vr}" causality="{causality}" '
+                         f'variability="{variability}"{initial}><{kind}{declared}{value}{derivative}/></ScalarVariable>')
+    outputs = [row for row in rows if row[3] == "output"]
+    unknowns = lambda selected: "\n".join(  # noqa: E731
+        f'      <Unknown index="{position[row[0]]}"{_dependencies(row, position, dependencies)}/>' for row in selected)
+    derivative = [row for row in rows if row[0] == "der(level)"]
+    initial = sorted([row for row in outputs if row[0] != "level"] + derivative, key=lambda row: position[row[0]])
     common = f'modelIdentifier="{identifier}" canGetAndSetFMUstate="true" canSerializeFMUstate="true"'
+    model_exchange = "" if source else f"<ModelExchange {common}/>"
     return f"""<?xml version="1.0" encoding="UTF-8"?>
 <fmiModelDescription fmiVersion="2.0" modelName="TypedStair" guid="{GUID}" numberOfEventIndicators="0"
     generationTool="shapefmu tests" variableNamingConvention="flat">
-  <ModelExchange {common}/>
+  {model_exchange}
   <CoSimulation {common} canHandleVariableCommunicationStepSize="true"/>
   <TypeDefinitions>
     <SimpleType name="Direction">
@@ -81,18 +111,85 @@ def typed_stair_description(identifier: str) -> str:
       </Enumeration>
     </SimpleType>
   </TypeDefinitions>
-  <ModelVariables>{_TYPED_STAIR_VARIABLES}  </ModelVariables>
-  <ModelStructure>{_TYPED_STAIR_STRUCTURE}  </ModelStructure>
+  <ModelVariables>
+{chr(10).join(variables)}
+  </ModelVariables>
+  <ModelStructure>
+    <Outputs>
+{unknowns(outputs)}
+    </Outputs>
+    {f"<Derivatives>{chr(10)}{unknowns(derivative)}{chr(10)}    </Derivatives>" if derivative else ""}
+    <InitialUnknowns>
+{unknowns(initial)}
+    </InitialUnknowns>
+  </ModelStructure>
 </fmiModelDescription>
 """
 
 
-def compile_fmu(c_file: Path, description: str, identifier: str, out: Path, include: Path, platform: str) -> Path:
+def typed_stair3_description(identifier: str, *, source: bool = False, dependencies: bool = True) -> str:
+    rows = _variables(source, fmi3=True)
+    vr3 = {row[0]: _VR3[row[1]](row[2]) if row[1] in _VR3 else row[2] for row in rows}
+    variables = ['    <Float64 name="time" valueReference="0" causality="independent" variability="continuous"/>']
+    for name, kind, _, causality, variability, start, _ in rows:
+        element = _TYPE3.get(kind, kind)
+        attributes = f'name="{name}" valueReference="{vr3[name]}" causality="{causality}"'
+        if variability != "continuous":
+            attributes += f' variability="{variability}"'
+        if kind == "Enumeration":
+            attributes += ' declaredType="Direction"'
+        if name == "level":
+            attributes += ' initial="exact"'
+        if name == "der(level)":
+            attributes += f' derivative="{vr3["level"]}"'
+        if kind == "String":
+            body = f"><Start value=\"{start}\"/></String>" if start is not None else "/>"
+            variables.append(f"    <String {attributes}{body}")
+            continue
+        value = f' start="{start}"' if start is not None else ""
+        variables.append(f"    <{element} {attributes}{value}/>")
+
+    def unknown(element, row):
+        if not dependencies:
+            return f'    <{element} valueReference="{vr3[row[0]]}"/>'
+        return f'    <{element} valueReference="{vr3[row[0]]}" dependencies="{" ".join(str(vr3[n]) for n in row[6])}"/>'
+
+    outputs = [row for row in rows if row[3] == "output"]
+    derivative = [row for row in rows if row[0] == "der(level)"]
+    initial = [row for row in outputs if row[0] != "level"] + derivative
+    structure = ([unknown("Output", row) for row in outputs] + [unknown("ContinuousStateDerivative", row) for row in derivative]
+                 + [unknown("InitialUnknown", row) for row in initial])
+    common = f'modelIdentifier="{identifier}" canGetAndSetFMUState="true" canSerializeFMUState="true"'
+    model_exchange = "" if source else f"<ModelExchange {common}/>"
+    return f"""<?xml version="1.0" encoding="UTF-8"?>
+<fmiModelDescription fmiVersion="3.0" modelName="TypedStair3" instantiationToken="{TOKEN3}"
+    generationTool="shapefmu tests" variableNamingConvention="flat">
+  {model_exchange}
+  <CoSimulation {common} canHandleVariableCommunicationStepSize="true" hasEventMode="false"/>
+  <TypeDefinitions>
+    <EnumerationType name="Direction">
+      <Item name="up" value="1"/>
+      <Item name="down" value="2"/>
+    </EnumerationType>
+  </TypeDefinitions>
+  <ModelVariables>
+{chr(10).join(variables)}
+  </ModelVariables>
+  <ModelStructure>
+{chr(10).join(structure)}
+  </ModelStructure>
+</fmiModelDescription>
+"""
+
+
+def compile_fmu(c_file: Path, description: str, identifier: str, out: Path, include: Path, platform: str,
+                defines: tuple[str, ...] = (), libraries: tuple[str, ...] = ()) -> Path:
     """Compile ``c_file`` into binaries/<platform>/<identifier>.so and zip it with ``description``."""
     out.parent.mkdir(parents=True, exist_ok=True)
     binary = out.with_suffix(".so")
     subprocess.run(["gcc", "-O2", "-shared", "-fPIC", "-std=c99", "-Wall", "-Werror", "-I", str(include), "-I", str(HERE),
-                    "-o", str(binary), str(c_file), "-lm"], check=True, capture_output=True, text=True)
+                    *(f"-D{name}" for name in defines), "-o", str(binary), str(c_file), *libraries, "-lm"],
+                   check=True, capture_output=True, text=True)
     with zipfile.ZipFile(out, "w", zipfile.ZIP_DEFLATED) as archive:
         archive.writestr("modelDescription.xml", description)
         archive.write(binary, f"binaries/{platform}/{identifier}{fmpy.sharedLibraryExtension}")
@@ -102,66 +199,29 @@ def compile_fmu(c_file: Path, description: str, identifier: str, out: Path, incl
     return out
 
 
-def build_typed_stair(directory: Path) -> Path:
-    """The TypedStair FMU (see tests/fmus_c/typed_stair.c) in ``directory``."""
+def _missing_library(directory: Path, name: str) -> tuple[str, ...]:
+    """Linker arguments that make a binary need lib<name>.so, which is built here and never shipped."""
+    folder = Path(tempfile.mkdtemp(prefix="missing-", dir=directory))
+    stub = folder / "stub.c"
+    stub.write_text("int shapefmu_test_needed_symbol(void) { return 0; }\n")
+    subprocess.run(["gcc", "-shared", "-fPIC", "-o", str(folder / f"lib{name}.so"), str(stub)], check=True)
+    return f"-L{folder}", "-Wl,--no-as-needed", f"-l{name}"
+
+
+def build_typed_stair(directory: Path, identifier: str = "TypedStair", *, quirks: tuple[str, ...] = (),
+                      source: bool = False, dependencies: bool = True, missing_library: str | None = None) -> Path:
+    """The TypedStair FMU (see tests/fmus_c/typed_stair.c), or a variant of it (module docstring), in ``directory``."""
     include = Path(str(resources.files("shapefmu.fmi.native") / "c"))
-    return compile_fmu(HERE / "typed_stair.c", typed_stair_description("TypedStair"), "TypedStair",
-                       Path(directory) / "TypedStair.fmu", include, fmpy.platform)
+    libraries = _missing_library(Path(directory), missing_library) if missing_library else ()
+    return compile_fmu(HERE / "typed_stair.c", typed_stair_description(identifier, source=source, dependencies=dependencies),
+                       identifier, Path(directory) / f"{identifier}.fmu", include, fmpy.platform,
+                       tuple(f"QUIRK_{q}" for q in quirks), libraries)
 
 
-_TYPED_STAIR3_VARIABLES = """
-    <Float64 name="time" valueReference="0" causality="independent" variability="continuous"/>
-    <Float64 name="x_in" valueReference="1" causality="input" start="0"/>
-    <Float64 name="x_out" valueReference="2" causality="output"/>
-    <Float64 name="period" valueReference="3" causality="parameter" variability="fixed" start="1"/>
-    <Float64 name="stop_at" valueReference="4" causality="parameter" variability="fixed" start="1e+300"/>
-    <Float64 name="level" valueReference="5" causality="output" initial="exact" start="0"/>
-    <Float64 name="der(level)" valueReference="6" causality="local" derivative="5"/>
-    <Int32 name="increment" valueReference="10" causality="parameter" variability="fixed" start="1"/>
-    <Int32 name="n_in" valueReference="11" causality="input" variability="discrete" start="0"/>
-    <Int32 name="counter" valueReference="12" causality="output" variability="discrete"/>
-    <Int32 name="n_out" valueReference="13" causality="output" variability="discrete"/>
-    <Enumeration name="mode" declaredType="Direction" valueReference="14" causality="parameter" variability="fixed" start="1"/>
-    <Enumeration name="e_in" declaredType="Direction" valueReference="15" causality="input" variability="discrete" start="1"/>
-    <Enumeration name="e_out" declaredType="Direction" valueReference="16" causality="output" variability="discrete"/>
-    <Boolean name="negate" valueReference="20" causality="parameter" variability="fixed" start="false"/>
-    <Boolean name="b_in" valueReference="21" causality="input" variability="discrete" start="false"/>
-    <Boolean name="b_out" valueReference="22" causality="output" variability="discrete"/>
-    <String name="label" valueReference="30" causality="parameter" variability="fixed"><Start value="stair"/></String>
-    <String name="s_in" valueReference="31" causality="input" variability="discrete"><Start value=""/></String>
-    <String name="s_out" valueReference="32" causality="output" variability="discrete"/>
-"""
-_TYPED_STAIR3_STRUCTURE = "".join(
-    f'    <{element} valueReference="{vr}" dependencies="{dependencies}"/>\n'
-    for element, vr, dependencies in (
-        ("Output", 2, "1"), ("Output", 5, ""), ("Output", 12, ""), ("Output", 13, "11"), ("Output", 16, "15"),
-        ("Output", 22, "21"), ("Output", 32, "31"), ("ContinuousStateDerivative", 6, "1"),
-        ("InitialUnknown", 2, "1"), ("InitialUnknown", 6, "1"), ("InitialUnknown", 12, ""), ("InitialUnknown", 13, "11"),
-        ("InitialUnknown", 16, "15"), ("InitialUnknown", 22, "21"), ("InitialUnknown", 32, "31")))
-
-
-def typed_stair3_description(identifier: str) -> str:
-    common = f'modelIdentifier="{identifier}" canGetAndSetFMUState="true" canSerializeFMUState="true"'
-    return f"""<?xml version="1.0" encoding="UTF-8"?>
-<fmiModelDescription fmiVersion="3.0" modelName="TypedStair3" instantiationToken="{{6f1c2b7e-typed-stair-0003}}"
-    generationTool="shapefmu tests" variableNamingConvention="flat">
-  <ModelExchange {common}/>
-  <CoSimulation {common} canHandleVariableCommunicationStepSize="true" hasEventMode="false"/>
-  <TypeDefinitions>
-    <EnumerationType name="Direction">
-      <Item name="up" value="1"/>
-      <Item name="down" value="2"/>
-    </EnumerationType>
-  </TypeDefinitions>
-  <ModelVariables>{_TYPED_STAIR3_VARIABLES}  </ModelVariables>
-  <ModelStructure>
-{_TYPED_STAIR3_STRUCTURE}  </ModelStructure>
-</fmiModelDescription>
-"""
-
-
-def build_typed_stair3(directory: Path) -> Path:
-    """The TypedStair3 FMU (FMI 3.0, see tests/fmus_c/typed_stair3.c) in ``directory``."""
+def build_typed_stair3(directory: Path, identifier: str = "TypedStair3", *, quirks: tuple[str, ...] = (),
+                       source: bool = False, dependencies: bool = True) -> Path:
+    """The TypedStair3 FMU (FMI 3.0, see tests/fmus_c/typed_stair3.c), or a variant of it, in ``directory``."""
     include = Path(str(resources.files("shapefmu.fmi.native") / "c"))
-    return compile_fmu(HERE / "typed_stair3.c", typed_stair3_description("TypedStair3"), "TypedStair3",
-                       Path(directory) / "TypedStair3.fmu", include, fmpy.platform_tuple)
+    return compile_fmu(HERE / "typed_stair3.c", typed_stair3_description(identifier, source=source, dependencies=dependencies),
+                       identifier, Path(directory) / f"{identifier}.fmu", include, fmpy.platform_tuple,
+                       tuple(f"QUIRK_{q}" for q in quirks))

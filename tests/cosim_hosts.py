@@ -26,12 +26,14 @@ def run_libcosim(ssp_path, step: float, n_steps: int, variables: list[str]) -> n
     for name in variables:
         component, _, variable = name.partition(".")
         index = slaves[component]
-        vr = {v.name.decode(): v.reference for v in execution.slave_variables(index)}[variable]
-        references.append((index, vr))
+        described = {v.name.decode(): v for v in execution.slave_variables(index)}[variable]
+        # Real variables and Integer ones (Integer and Real value references are separate spaces)
+        read = observer.last_integer_values if described.type == 1 else observer.last_real_values
+        references.append((read, index, described.reference))
     values = np.full((n_steps + 1, len(variables)), np.nan)
     for k in range(1, n_steps + 1):
         execution.step(1)
-        values[k] = [observer.last_real_values(index, [vr])[0] for index, vr in references]
+        values[k] = [read(index, [vr])[0] for read, index, vr in references]
     return values
 
 

@@ -9,11 +9,14 @@
  *   e_out   = 3 - e_in (up <-> down)                           Enumeration Direction, feeds through e_in
  *   b_out   = b_in xor negate                                  Boolean, feeds through b_in
  *   s_out   = label ":" s_in                                   String, feeds through s_in
+ *   r_out   = r_in + counter                                   Real discrete, feeds through r_in
+ *   steps, provisional_steps: Co-Simulation steps taken, and those with noSetFMUStatePriorToCurrentPoint false
  * At t = stop_at the FMU asks to end the simulation, as the FMI Reference FMU "Stair" does at 9 s:
  * in Co-Simulation fmi2DoStep stops there and returns fmi2Discard, fmi2GetBooleanStatus(fmi2Terminated)
  * is then true and fmi2GetRealStatus(fmi2LastSuccessfulTime) is stop_at; in Model Exchange stop_at is
  * a time event whose fmi2NewDiscreteStates sets terminateSimulation.
- * Every refused call logs a message and returns fmi2Error; the host never crashes.
+ * Every refused call logs a message and returns fmi2Error; the host never crashes. The exporter
+ * behaviours QUIRK_PROVISIONAL and QUIRK_RESET_IN_SETUP are described in typed_stair_model.h.
  */
 #include <math.h>
 #include <stdio.h>
@@ -23,8 +26,10 @@
 #include "typed_stair_model.h"
 
 #define GUID "{6f1c2b7e-typed-stair-0001}"
+
 typedef struct {
     fmi2Type type;
+    int mode;
     fmi2CallbackFunctions callbacks;
     char name[64];
     State s;
@@ -58,6 +63,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     Instance *inst = functions->allocateMemory(1, sizeof(Instance));
     if (inst == NULL) return NULL;
     inst->type = fmuType;
+    inst->mode = INSTANTIATED;
     inst->callbacks = *functions;
     snprintf(inst->name, sizeof inst->name, "%s", instanceName);
     start_values(&inst->s);
@@ -82,19 +88,27 @@ fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean tolDefined, fmi2Real
     Instance *inst = c;
     (void)tolDefined; (void)tol; (void)stopDefined; (void)stop;
     if (inst == NULL) return fmi2Error;
+#ifdef QUIRK_RESET_IN_SETUP
+    start_values(&inst->s);
+#endif
     inst->s.time = start;
     return fmi2OK;
 }
 
-fmi2Status fmi2EnterInitializationMode(fmi2Component c) { return c == NULL ? fmi2Error : fmi2OK; }
+fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
+    Instance *inst = c;
+    if (inst == NULL) return fmi2Error;
+    inst->mode = INITIALIZATION;
+    return fmi2OK;
+}
 
 fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
     Instance *inst = c;
     if (inst == NULL) return fmi2Error;
     if (!(inst->s.real[VR_PERIOD] > 0.0))
         return refuse(inst, "fmi2ExitInitializationMode", "parameter period must be > 0");
-    inst->s.initialized = 1;
-    compute(&inst->s);
+    initialized(&inst->s);
+    inst->mode = inst->type == fmi2ModelExchange ? EVENT : STEPPING;
     return fmi2OK;
 }
 
@@ -104,6 +118,7 @@ fmi2Status fmi2Reset(fmi2Component c) {
     Instance *inst = c;
     if (inst == NULL) return fmi2Error;
     start_values(&inst->s);
+    inst->mode = INSTANTIATED;
     return fmi2OK;
 }
 
@@ -113,6 +128,11 @@ fmi2Status fmi2Reset(fmi2Component c) {
     if ((vr) >= (n)) return refuse(inst, function, "unknown value reference")
 
 static int is_parameter_real(fmi2ValueReference vr) { return vr == VR_PERIOD || vr == VR_STOP_AT; }
+
+/* Model Exchange in continuous-time mode: discrete inputs wait for event mode. */
+#define CHECK_DISCRETE_INPUT(name, function)                                                        \
+    if (inst->type == fmi2ModelExchange && inst->mode == CONTINUOUS)                                \
+    return refuse(inst, function, "discrete input " name " can be set only in initialization mode or event mode")
 static int is_parameter_integer(fmi2ValueReference vr) { return vr == VR_INCREMENT || vr == VR_MODE; }
 
 fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t n, fmi2Real value[]) {
@@ -130,8 +150,9 @@ fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t n,
     if (inst == NULL) return fmi2Error;
     for (size_t i = 0; i < n; i++) {
         CHECK_VR(vr[i], N_REAL, "fmi2SetReal");
-        if (vr[i] != VR_X_IN && !is_parameter_real(vr[i]) && !(vr[i] == VR_LEVEL && !inst->s.initialized))
-            return refuse(inst, "fmi2SetReal", "only x_in, level (before initialisation) and parameters can be set");
+        if (vr[i] != VR_X_IN && vr[i] != VR_R_IN && !is_parameter_real(vr[i]) && !(vr[i] == VR_LEVEL && !inst->s.initialized))
+            return refuse(inst, "fmi2SetReal", "only x_in, r_in, level (before initialisation) and parameters can be set");
+        if (vr[i] == VR_R_IN) CHECK_DISCRETE_INPUT("r_in", "fmi2SetReal");
         if (is_parameter_real(vr[i]) && inst->s.initialized)
             return refuse(inst, "fmi2SetReal", "parameters are fixed after initialisation");
         if (!isfinite(value[i])) return refuse(inst, "fmi2SetReal", "values must be finite");
@@ -158,6 +179,8 @@ fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t
         CHECK_VR(vr[i], N_INTEGER, "fmi2SetInteger");
         if (vr[i] != VR_N_IN && vr[i] != VR_E_IN && !is_parameter_integer(vr[i]))
             return refuse(inst, "fmi2SetInteger", "outputs cannot be set");
+        if (vr[i] == VR_N_IN) CHECK_DISCRETE_INPUT("n_in", "fmi2SetInteger");
+        if (vr[i] == VR_E_IN) CHECK_DISCRETE_INPUT("e_in", "fmi2SetInteger");
         if (is_parameter_integer(vr[i]) && inst->s.initialized)
             return refuse(inst, "fmi2SetInteger", "parameters are fixed after initialisation");
         if ((vr[i] == VR_MODE || vr[i] == VR_E_IN) && value[i] != 1 && value[i] != 2)
@@ -184,6 +207,7 @@ fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t
     for (size_t i = 0; i < n; i++) {
         CHECK_VR(vr[i], N_BOOLEAN, "fmi2SetBoolean");
         if (vr[i] == VR_B_OUT) return refuse(inst, "fmi2SetBoolean", "b_out is an output");
+        if (vr[i] == VR_B_IN) CHECK_DISCRETE_INPUT("b_in", "fmi2SetBoolean");
         if (vr[i] == VR_NEGATE && inst->s.initialized)
             return refuse(inst, "fmi2SetBoolean", "parameters are fixed after initialisation");
         inst->s.boolean[vr[i]] = value[i] != fmi2False;
@@ -208,6 +232,7 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
     for (size_t i = 0; i < n; i++) {
         CHECK_VR(vr[i], N_STRING, "fmi2SetString");
         if (vr[i] == VR_S_OUT) return refuse(inst, "fmi2SetString", "s_out is an output");
+        if (vr[i] == VR_S_IN) CHECK_DISCRETE_INPUT("s_in", "fmi2SetString");
         if (vr[i] == VR_LABEL && inst->s.initialized)
             return refuse(inst, "fmi2SetString", "parameters are fixed after initialisation");
         if (value[i] == NULL || strlen(value[i]) >= TEXT)
@@ -273,7 +298,12 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
 
 /* ------------------------------------------------------------------ Model Exchange */
 
-fmi2Status fmi2EnterEventMode(fmi2Component c) { return c == NULL ? fmi2Error : fmi2OK; }
+fmi2Status fmi2EnterEventMode(fmi2Component c) {
+    Instance *inst = c;
+    if (inst == NULL) return fmi2Error;
+    inst->mode = EVENT;
+    return fmi2OK;
+}
 
 fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *info) {
     Instance *inst = c;
@@ -290,7 +320,12 @@ fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *info) {
     return fmi2OK;
 }
 
-fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c) { return c == NULL ? fmi2Error : fmi2OK; }
+fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c) {
+    Instance *inst = c;
+    if (inst == NULL) return fmi2Error;
+    inst->mode = CONTINUOUS;
+    return fmi2OK;
+}
 
 fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSet, fmi2Boolean *event, fmi2Boolean *stop) {
     (void)noSet;
@@ -357,7 +392,6 @@ fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReferenc
 
 fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean noSet) {
     Instance *inst = c;
-    (void)noSet;
     if (inst == NULL) return fmi2Error;
     State *s = &inst->s;
     if (s->terminated) return refuse(inst, "fmi2DoStep", "the simulation was terminated at stop_at");
@@ -368,6 +402,7 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean noSet
         end = fmax(t, s->real[VR_STOP_AT]);
         s->terminated = 1;
     }
+    begin_step(s, noSet != fmi2False);
     s->real[VR_LEVEL] += s->real[VR_X_IN] * (end - t);
     s->time = end;
     compute(s);
