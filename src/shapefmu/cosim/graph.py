@@ -1,8 +1,9 @@
 """Stepping order and algebraic loops, from connections and declared output dependencies.
 
 An output *feeds through* an input when the FMU's ModelStructure lists that input among the
-output's ``dependencies`` (FMI 2.0 sec. 2.2.8; an output without a ``dependencies`` attribute
-depends on every input). An algebraic loop is a cycle in the graph whose edges are connections
+output's ``dependencies`` (FMI 2.0 sec. 2.2.8, FMI 3.0 sec. 2.4.8; an output without a
+``dependencies`` attribute depends on every input *the FMU has*: none for a source such as the
+Reference FMU Stair or pythonfmu's Csvdemo, whose outputs are results of its step, passed on after it). An algebraic loop is a cycle in the graph whose edges are connections
 (output -> input) and feed-throughs (input -> output inside one FMU): around it, the values at a
 communication point depend on themselves. Every such cycle's components form one loop group that
 the master steps together, iterating on the torn inputs with FMU state rollback.
@@ -31,21 +32,18 @@ class Stage:
         return bool(self.tears)
 
 
-def output_dependencies(description) -> dict[str, set[str] | None]:
-    """``{output: inputs it depends on}``; None where the FMU declares no dependencies (= all)."""
+def output_dependencies(description) -> dict[str, set[str]]:
+    """``{output: inputs it depends on}``; every input of the FMU where it declares no dependencies."""
     inputs = {v.name for v in description.modelVariables if v.causality == "input"}
-    dependencies = {}
-    for unknown in description.outputs:
-        if unknown.dependencies is None:
-            dependencies[unknown.variable.name] = None
-        else:
-            dependencies[unknown.variable.name] = {v.name for v in unknown.dependencies if v.name in inputs}
-    return dependencies
+    return {unknown.variable.name: set(inputs) if unknown.dependencies is None
+            else {v.name for v in unknown.dependencies if v.name in inputs}
+            for unknown in description.outputs}
 
 
-def _feeds_through(dependencies: dict[str, set[str] | None], output: str, input_: str | None = None) -> bool:
-    """Does ``output`` depend on ``input_`` (or, without one, on any input) at the same instant?"""
-    declared = dependencies.get(output)  # absent or None: the standard's default, every input
+def _feeds_through(dependencies: dict[str, set[str]], output: str, input_: str | None = None) -> bool:
+    """Does ``output`` depend on ``input_`` (or, without one, on any input) at the same instant?
+    An output missing from the ModelStructure (which the standard forbids) is taken to depend on every input."""
+    declared = dependencies.get(output)
     if declared is None:
         return True
     return bool(declared) if input_ is None else input_ in declared

@@ -3,7 +3,10 @@
 Communication semantics (``t_k = t0 + k*h``; the last step is shortened to end exactly at stop):
 
 * Initialisation: every FMU gets ``fmi2SetupExperiment``, then its SSP parameter bindings and the
-  run's parameters, then ``fmi2EnterInitializationMode``. Inputs are propagated in initialisation
+  run's parameters (one set of values, the run's winning), then ``fmi2EnterInitializationMode``
+  (FMI 3.0: the values, then ``fmi3EnterInitializationMode``), as fmpy and libcosim do: an FMU may
+  reset its variables to their start values in ``fmi2SetupExperiment`` (a 20-sim export does), so a
+  value set before it would be lost. The same after :meth:`Master.reset`. Inputs are propagated in initialisation
   mode (Jacobi: as many sweeps of "read every output, set every input" as there are components,
   as libcosim does; Gauss-Seidel: once in stepping order, iterating loop groups), then
   ``fmi2ExitInitializationMode``, and the outputs are read: that is the record at ``t0``.
@@ -136,7 +139,8 @@ class Master:
         self._unit = {u.name: u for u in self.units}
         try:
             self._build(record)
-            self._apply_bindings()
+            # read once (.ssv files included); applied at each run's initialisation
+            self._bindings = {u.name: self.system.parameter_values(u.name) for u in self.units}
         except BaseException:
             self.close()
             raise
@@ -262,13 +266,6 @@ class Master:
                     slots.append((unit, d, source, s, f, o))
         return slots
 
-    def _apply_bindings(self):
-        for unit in self.units:
-            try:
-                unit.apply_values(self.system.parameter_values(unit.name))
-            except FMUFailure as failure:
-                raise self._error(failure, self.system.start_time, None) from None
-
     # ----------------------------------------------------------------------------- code generation
     def _compile(self):
         """``run_chunk(k0, k1, row, t0, h, t_stop, last, buf, every)`` for this system and scheme:
@@ -295,7 +292,7 @@ class Master:
     def run(self, stop_time: float, parameters: dict[str, float] | None = None) -> np.ndarray:
         """Initialise, step to ``stop_time`` and return the recorded results (structured array).
 
-        ``parameters`` ({"component.variable": value}) apply to this run only, after the system's
+        ``parameters`` ({"component.variable": value}) apply to this run only, over the system's
         parameter bindings; values (or their text) are typed by each variable's declared type. A
         second call starts again from a reset (see :meth:`reset`). A run that an FMU ended early
         returns the rows up to that time, and ``termination`` says who ended it.
@@ -378,7 +375,7 @@ class Master:
                 raise ValueError(f"parameter {reference!r} has type {declared.type}, which cannot be set by value")
             # typed by the model description: "--set shaper.kind=zvd", "--set a.flag=true"
             grouped[component][variable] = typed_value(value, kind, enumeration_items(unit.description, declared),
-                                                       f"parameter {reference}")
+                                                       f"parameter {reference}", declared.type)
         return grouped
 
     def _error(self, failure: FMUFailure, t, partial) -> CosimError:
@@ -391,7 +388,7 @@ class Master:
     def _initialize(self, t0: float, parameters: dict[str, dict]) -> None:
         for unit in self.units:
             unit.setup(t0)
-            unit.apply_values(parameters[unit.name])
+            unit.apply_values({**self._bindings[unit.name], **parameters[unit.name]})
             unit.enter_initialization()
         if self.algorithm == "jacobi":
             for _ in range(len(self.units)):
@@ -452,7 +449,7 @@ class Master:
                         unit.in_val[d] = value
                 unit.set_inputs()
                 if not initializing:
-                    unit.step(t, dt)
+                    unit.step(t, dt, final=False)  # it may be repeated from the saved state
                 unit.read()
             return np.array([source.out_val[s] * f + o for _, _, source, s, f, o in slots])
 
@@ -481,7 +478,8 @@ class Master:
                          f"no convergence in {self.max_loop_iterations} iterations (residual {np.max(np.abs(gx - x)):.3g})", time=t)
 
     def reset(self) -> None:
-        """Back to the freshly instantiated state with the SSP parameter bindings re-applied.
+        """Back to the freshly instantiated state; the next run applies the SSP parameter bindings
+        again at its initialisation.
 
         Uses ``fmi2Reset`` on every FMU (no re-extraction or re-loading).
         """
@@ -490,7 +488,6 @@ class Master:
         try:
             for unit in self.units:
                 unit.reset()
-            self._apply_bindings()
         except FMUFailure as failure:
             raise self._error(failure, None, None) from None
         self._state = "instantiated"

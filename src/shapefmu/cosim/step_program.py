@@ -53,8 +53,11 @@ class Guard:
 
 # Statements: ("input", i, f, d, early, j, g, s, factor, offset)  iv_i_f[d] = (ev|ov)_j_g[s] * factor + offset
 #             ("set", i, f) / ("early", i, f) / ("read", i, f)     Set<f> / Get<f> into ev_i_f / into ov_i_f
-#             ("do", i, m)                                         fmi2DoStep / fmi3DoStep over dt, or min(m h, t_stop - t)
+#             ("do", i, m)                                         fmi2DoStep / fmi3DoStep over dt, or min(m h, t_stop - t),
+#                                                                  final (noSetFMUStatePriorToCurrentPoint true): no
+#                                                                  step outside an algebraic loop is rolled back
 #             ("me", i, m)                                         a Model Exchange unit's step (Python only)
+#             ("inputs", i)                                        a Model Exchange unit sets its inputs (Python only)
 #             ("loop", n)                                          solve algebraic loop n (Python only)
 # f, g: family names (see .types); factor and offset are 1 and 0 except on Real connections.
 
@@ -74,7 +77,10 @@ def plan(master) -> list[tuple[Guard, list[tuple]]]:
     def step(i, with_inputs):
         unit = units[i]
         out = inputs(i) if with_inputs else []
-        out += [("set", i, f) for f, channel in unit.channels.items() if channel.n_in]
+        if isinstance(unit, ModelExchangeUnit):  # its discrete inputs wait for event mode: it sets them
+            out += [("inputs", i)] if any(channel.n_in for channel in unit.channels.values()) else []
+        else:
+            out += [("set", i, f) for f, channel in unit.channels.items() if channel.n_in]
         out += [("early", i, f) for f in master._early.get(unit.name, {})]
         out.append(("me" if isinstance(unit, ModelExchangeUnit) else "do", i, master.multiples[unit.name]))
         return out
@@ -152,12 +158,14 @@ def python_chunk(master, blocks):
             return [f"if (status := {function}(c{i}, {', '.join(arrays)}{extra})) > 1: fail({i}, {call!r}, {when}, status)"]
         if kind == "loop":
             return [f"solve_loop({i}, t, dt)"]
+        if kind == "inputs":
+            return [f"unit{i}.set_inputs()"]
         m = op[2]
         h = "dt" if m == 1 else f"min({m!r} * h, t_stop - t)"
         if kind == "me" or unit.fmi3:
             return [f"if unit{i}.step(t, {h}): stopping = True"]
         return [f"ta{i}.value = t", f"ha{i}.value = {h}",
-                f"if (status := do{i}(c{i}, ta{i}, ha{i}, 0)) > 1 and unit{i}.stop_or_fail(t, {h}, status): stopping = True"]
+                f"if (status := do{i}(c{i}, ta{i}, ha{i}, 1)) > 1 and unit{i}.stop_or_fail(t, {h}, status): stopping = True"]
 
     lines = ["def run_chunk(k0, k1, row, t0, h, t_stop, last, buf, every):",
              "    stopping = False",
@@ -357,12 +365,12 @@ def _c_source(master, blocks, names, dtype) -> tuple[str, list[str]]:
         index = call_index(f"{u.prefix}DoStep")
         if u.fmi3:
             return [f"{{ const double hs = {h};",
-                    f"  status = do{i}(c{i}, t, hs, 0, &event{i}, &terminate{i}, &early{i}, &last{i});",
+                    f"  status = do{i}(c{i}, t, hs, 1, &event{i}, &terminate{i}, &early{i}, &last{i});",
                     f"  if (status > 1 && !(status == 2 && terminate{i})) FAIL({i}, {index}, t, status);",
                     f"  if (terminate{i}) {{ pending[{i}] = 2; pending_time[{i}] = (last{i} >= t && last{i} <= t + hs) ? last{i} : t + hs; stop = 1; }} }}"]
         # fmi2Discard may be a termination request: Python asks fmi2GetBooleanStatus after the step.
         return [f"{{ const double hs = {h};",
-                f"  if ((status = do{i}(c{i}, t, hs, 0)) > 1) {{ if (status != 2) FAIL({i}, {index}, t, status);",
+                f"  if ((status = do{i}(c{i}, t, hs, 1)) > 1) {{ if (status != 2) FAIL({i}, {index}, t, status);",
                 f"    pending[{i}] = 1; pending_time[{i}] = t + hs; stop = 1; }} }}"]
 
     index = {u.name: i for i, u in enumerate(master.units)}

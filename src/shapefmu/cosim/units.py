@@ -9,7 +9,11 @@ A Co-Simulation FMU steps itself (``fmi2DoStep``). A Model Exchange FMU is integ
 over each macro step with fmpy's SUNDIALS CVode (BDF, dense Newton), holding its inputs constant
 over the step (zero-order hold, as a Co-Simulation FMU sees them), locating state events by root
 finding on the event indicators, and handling time events and step events with the FMI 2.0 event
-iteration (``fmi2NewDiscreteStates`` until no new discrete states are needed).
+iteration (``fmi2NewDiscreteStates`` until no new discrete states are needed). Its discrete inputs
+(variability discrete: every Integer, Boolean, String and Enumeration, and discrete Reals) change
+only at events (FMI 2.0 sec. 3.2.3, FMI 3.0 sec. 3.2.2): at a communication point where one of them
+changed, the master enters event mode, sets the inputs there and iterates the event, as fmpy does at
+the discontinuities of an input table; continuous inputs are set in continuous-time mode.
 """
 
 from __future__ import annotations
@@ -226,7 +230,7 @@ class Unit:
             call = f"{self.prefix}Set{family.name}({name}={value!r})"
             try:
                 value = typed_value(value, kind_of(variable), enumeration_items(self.description, variable),
-                                    f"{self.name}.{name}")
+                                    f"{self.name}.{name}", variable.type)
             except ValueError as error:
                 raise FMUFailure(self, call, str(error)) from None
             array = (family.ctype * 1)(value.encode() if family.name == "String" else value)
@@ -249,10 +253,15 @@ class Unit:
         self._call(f"{self.prefix}Reset", self.fmu.reset)
         self.terminated_at = None
 
-    def step(self, t: float, h: float) -> bool:
-        """One step; True when the FMU asked to end the simulation (``terminated_at`` says when)."""
+    def step(self, t: float, h: float, final: bool = True) -> bool:
+        """One step; True when the FMU asked to end the simulation (``terminated_at`` says when).
+
+        ``final``: the master will not roll the FMU back before ``t`` (noSetFMUStatePriorToCurrentPoint,
+        FMI 2.0 sec. 4.2.2). Only a step inside an algebraic loop, which may be repeated from a saved
+        state, passes False: an FMU may keep such a step provisional until a later step confirms it.
+        """
         self.time_arg.value, self.step_arg.value = t, h
-        status = self.do_step(self.c, self.time_arg, self.step_arg, 0)
+        status = self.do_step(self.c, self.time_arg, self.step_arg, 1 if final else 0)
         return status > 1 and self.stop_or_fail(t, h, status)
 
     def stop_or_fail(self, t: float, h: float, status: int) -> bool:
@@ -340,6 +349,52 @@ class ModelExchangeUnit(Unit):
     def configure(self, inputs, reads):
         super().configure(inputs, reads)
         self._held = None
+        self._continuous_time = False  # in continuous-time mode: discrete inputs wait for an event
+        self._continuous_inputs = []  # (channel, its continuous inputs' channel, their indices in it)
+        self._discrete_inputs = []  # (channel, indices of its discrete inputs)
+        for channel in self._setters:
+            continuous = [i for i, name in enumerate(channel.in_names) if self.variables[name].variability == "continuous"]
+            discrete = [i for i in range(channel.n_in) if i not in continuous]
+            if continuous:
+                subset = Channel(channel.family)
+                subset.in_names = [channel.in_names[i] for i in continuous]
+                subset.allocate(self.variables, self._raw_function, self.fmi3)
+                self._continuous_inputs.append((channel, subset, continuous))
+            if discrete:
+                self._discrete_inputs.append((channel, discrete))
+        self._discrete_set = None  # the discrete input values the FMU has
+
+    def _discrete_values(self) -> tuple:
+        return tuple(channel.in_val[i] for channel, indices in self._discrete_inputs for i in indices)
+
+    def set_inputs(self) -> None:
+        """Set every input, or in continuous-time mode the continuous ones, and the discrete ones
+        in event mode where they changed (see the module docstring)."""
+        if not self._continuous_time:  # initialization or event mode: every input may be set
+            super().set_inputs()
+            self._discrete_set = self._discrete_values()
+            return
+        try:
+            for channel, subset, indices in self._continuous_inputs:
+                for j, i in enumerate(indices):
+                    subset.in_val[j] = channel.in_val[i]
+                self.check(subset.set(self.c), f"{self.prefix}Set{channel.family.name}")
+            if self._discrete_values() != self._discrete_set:
+                self._input_event()
+        except FMUFailure as failure:
+            failure.time = self.time if failure.time is None else failure.time
+            raise
+
+    def _input_event(self) -> None:
+        """A discrete input changed at the current time: set the inputs in event mode and iterate."""
+        self._call(f"{self.prefix}EnterEventMode", self.fmu.enterEventMode)
+        self._continuous_time = False
+        self.set_inputs()
+        self._event_iteration()
+        if self.terminated_at is None:
+            self._call(f"{self.prefix}EnterContinuousTimeMode", self.fmu.enterContinuousTimeMode)
+            self._continuous_time = True
+        self._held = None  # restart the integrator at the event
 
     def exit_initialization(self, start_time: float, tolerance: float) -> None:
         from fmpy.sundials import CVodeSolver
@@ -350,6 +405,7 @@ class ModelExchangeUnit(Unit):
         if self.terminated_at is not None:
             return
         self._call(f"{self.prefix}EnterContinuousTimeMode", self.fmu.enterContinuousTimeMode)
+        self._continuous_time = True
         fmu, description = self.fmu, self.description
         self.solver = CVodeSolver(
             nx=description.numberOfContinuousStates, nz=description.numberOfEventIndicators,
@@ -380,16 +436,19 @@ class ModelExchangeUnit(Unit):
             self.termination_call = f"{call} set terminateSimulation"
         self.next_event_time = next_time if defined else math.inf
 
-    def step(self, t: float, h: float) -> bool:
-        """Integrate over [t, t + h]; True when the FMU asked to end the simulation on the way."""
+    def step(self, t: float, h: float, final: bool = True) -> bool:
+        """Integrate over [t, t + h]; True when the FMU asked to end the simulation on the way
+        (``final``: as for a Co-Simulation step, passed on to fmi2CompletedIntegratorStep)."""
+        if self.terminated_at is not None:  # it asked at the event of an input that changed at t
+            return True
         try:
-            self._integrate(t, h)
+            self._integrate(t, h, final)
         except FMUFailure as failure:
             failure.time = t if failure.time is None else failure.time
             raise
         return self.terminated_at is not None
 
-    def _integrate(self, t: float, h: float) -> None:
+    def _integrate(self, t: float, h: float, final: bool) -> None:
         held = [list(channel.in_val[: channel.n_in]) for channel in self._setters]
         if held != self._held:
             # A changed input is a discontinuity of the right-hand side: restart the integrator
@@ -402,7 +461,8 @@ class ModelExchangeUnit(Unit):
             t_next = min(t_end, self.next_event_time)
             state_event, _, time = self._call("CVode", self.solver.step, time, t_next)
             self._call(f"{self.prefix}SetTime", self.fmu.setTime, time)
-            step_event, terminate = self._call(f"{self.prefix}CompletedIntegratorStep", self.fmu.completedIntegratorStep)
+            step_event, terminate = self._call(f"{self.prefix}CompletedIntegratorStep", self.fmu.completedIntegratorStep,
+                                               noSetFMUStatePriorToCurrentPoint=final)
             self.time = time
             if terminate:
                 self.terminated_at = time
@@ -420,9 +480,13 @@ class ModelExchangeUnit(Unit):
 
     def save_state(self) -> None:
         super().save_state()
-        self._saved_time = self.time
+        self._saved = self.time, self._discrete_set
 
     def restore_state(self) -> None:
         super().restore_state()
-        self.time = self._saved_time
+        self.time, self._discrete_set = self._saved
         self._held = None  # re-initialise the integrator at the restored point
+
+    def reset(self) -> None:
+        super().reset()
+        self._continuous_time = False

@@ -68,7 +68,8 @@ class Unit3(Unit):
         self.do_step = _raw(self.fmu.dll, "fmi3DoStep")
         self.time_arg, self.step_arg = c_double(), c_double()
         self._flags = (c_bool(), c_bool(), c_bool(), c_double())  # eventHandlingNeeded, terminate, earlyReturn, last
-        self.can_roll_back = bool(getattr(self._capabilities(), "canGetAndSetFMUState", False))
+        # fmpy reads FMI 3.0's canGetAndSetFMUState into the FMI 2.0 spelling of the attribute
+        self.can_roll_back = bool(self._capabilities().canGetAndSetFMUstate)
         self._state = c_void_p()
         self._start_time = 0.0
         self.configure([], [])
@@ -89,10 +90,11 @@ class Unit3(Unit):
     def enter_initialization(self) -> None:
         self._call("fmi3EnterInitializationMode", self.fmu.enterInitializationMode, startTime=self._start_time)
 
-    def step(self, t: float, h: float) -> bool:
-        """One fmi3DoStep; True when the FMU asked to end the simulation (``terminated_at``)."""
+    def step(self, t: float, h: float, final: bool = True) -> bool:
+        """One fmi3DoStep; True when the FMU asked to end the simulation (``terminated_at``);
+        ``final``: noSetFMUStatePriorToCurrentPoint (see :meth:`Unit.step`)."""
         event, terminate, early, last = self._flags
-        status = self.do_step(self.c, c_double(t), c_double(h), c_bool(False), byref(event), byref(terminate),
+        status = self.do_step(self.c, c_double(t), c_double(h), c_bool(final), byref(event), byref(terminate),
                               byref(early), byref(last))
         if status > 1 and not (status == 2 and terminate.value):
             raise FMUFailure(self, "fmi3DoStep", status, time=t)

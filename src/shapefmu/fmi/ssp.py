@@ -60,6 +60,7 @@ class Connector:
     declared_type: str | None = None  # an Enumeration's type name
     items: dict[str, int] = field(default_factory=dict)  # an Enumeration's {item: value}
     start: str | None = None  # the FMU's start value, as written in its modelDescription.xml
+    variable_type: str | None = None  # the FMU variable's own type (FMI 3.0: Int8 ... UInt64), which bounds a value
 
 
 @dataclass
@@ -111,7 +112,7 @@ def _fmu_connectors(fmu: Path) -> dict[str, Connector]:
         if variable.causality in ("input", "output", "parameter", "calculatedParameter") and kind and not variable.shape:
             declared = variable.declaredType.name if kind == "Enumeration" and variable.declaredType else None
             connectors[variable.name] = Connector(variable.name, variable.causality, kind, declared,
-                                                  enumeration_items(description, variable), variable.start)
+                                                  enumeration_items(description, variable), variable.start, variable.type)
     return connectors
 
 
@@ -222,7 +223,8 @@ class System:
             connector = component.connectors.get(name)
             if connector is None:
                 raise ValueError(f"{where}: FMU {component.fmu.name} has no parameter or input {name!r}")
-            checked[name] = typed_value(value, connector.type, connector.items, f"{where}: parameter {name!r}")
+            checked[name] = typed_value(value, connector.type, connector.items, f"{where}: parameter {name!r}",
+                                        connector.variable_type)
         return checked
 
     # ----------------------------------------------------------------------------- writing

@@ -22,19 +22,28 @@ def kind_of(variable) -> str | None:
 
 
 _TRUE, _FALSE = ("true", "1"), ("false", "0")
-# fmi2Integer is a C int (fmi2TypesPlatform.h), as is fmi3Int32: 32 bits on every platform.
-INTEGER_RANGE = (-(2**31), 2**31 - 1)
+# The values of each integer type: fmi2Integer is a C int (fmi2TypesPlatform.h), as is fmi3Int32, 32
+# bits on every platform; FMI 3.0 has a type per width and sign (fmi3PlatformTypes.h), and its
+# Enumerations are Int64.
+INTEGER_RANGES = {
+    "Integer": (-(2**31), 2**31 - 1), "Int32": (-(2**31), 2**31 - 1),
+    "Int8": (-(2**7), 2**7 - 1), "UInt8": (0, 2**8 - 1), "Int16": (-(2**15), 2**15 - 1), "UInt16": (0, 2**16 - 1),
+    "UInt32": (0, 2**32 - 1), "Int64": (-(2**63), 2**63 - 1), "UInt64": (0, 2**64 - 1),
+}
 
 
-def typed_value(value, kind: str, items: dict[str, int] | None = None, what: str = "value"):
+def typed_value(value, kind: str, items: dict[str, int] | None = None, what: str = "value", variable_type: str | None = None):
     """``value`` (a Python value or the text of a command line / parameter file) as the Python value
     of an FMI variable of ``kind``; an Enumeration takes an item name (``items``) or its integer.
+    ``variable_type`` is the variable's FMI type (``"UInt8"``, ``"Int64"``, ...): an integer must fit
+    it (without one, the 32 bits of fmi2Integer / fmi3Int32).
 
     Nothing is lost on the way: ``1.5`` for an Integer is refused, not truncated to 1, and an
-    integer beyond the 32 bits of fmi2Integer / fmi3Int32 is refused, not wrapped around by ctypes.
+    integer beyond its type's range is refused, not wrapped around by ctypes.
     """
     text = value.strip() if isinstance(value, str) else None
-    low, high = INTEGER_RANGE
+    integer_type = variable_type if variable_type in INTEGER_RANGES else "Integer"
+    low, high = INTEGER_RANGES[integer_type]
     try:
         if kind == "Real":
             if isinstance(value, bool):
@@ -61,7 +70,8 @@ def typed_value(value, kind: str, items: dict[str, int] | None = None, what: str
         valid = {"Real": "a number", "Integer": f"an integer in [{low}, {high}]", "Boolean": "true, false, 1 or 0",
                  "String": "text",
                  "Enumeration": f"one of {', '.join(items)} or its number" if items else "an integer"}[kind]
-        raise ValueError(f"{what} must be {valid} ({kind}), got {value!r}") from None
+        named = integer_type if kind == "Integer" and variable_type else kind  # "(UInt8)", "(Integer)"
+        raise ValueError(f"{what} must be {valid} ({named}), got {value!r}") from None
 
 
 def enumeration_items(description, variable) -> dict[str, int]:
