@@ -33,6 +33,7 @@ from fmpy.fmi2 import FMU2Slave
 from native_loop import c_loop_seconds
 
 from shapefmu.cosim import Master
+from shapefmu.cosim.peer_hosts import preload_tbb
 from shapefmu.fmi import build_fmu
 from shapefmu.fmi.native import build_plant_fmu
 from shapefmu.fmi.native.sampled import build_native_fmu
@@ -86,6 +87,7 @@ def ecos(ssp: Path) -> float:
     """ecospy at its best: its threads confined to one core. Free to use both cores of this machine,
     ecos handing each step between threads on different cores ran the shaper system 4-5x slower
     (about 55,000 against 265,000 steps per second, measured here)."""
+    preload_tbb()  # ecospy's libtbb.so.12, from the tbb wheel (no Debian libtbb12 needed)
     from ecospy.EcosSimulation import EcosSimulation
 
     cores = os.sched_getaffinity(0)

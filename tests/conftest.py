@@ -4,7 +4,7 @@ FMU fixtures are session-scoped (each FMU is built once per test run) and live i
 per family, so the families do not share a file.
 """
 
-from hosts import preload_tbb
+from shapefmu.cosim.peer_hosts import preload_tbb
 
 # ecospy needs oneTBB; the `tbb` wheel of the test extra provides it without a Debian package.
 preload_tbb()

@@ -26,6 +26,8 @@ import numpy as np
 from fmpy import extract, read_model_description
 from fmpy.fmi2 import FMU2Slave
 
+from shapefmu.cosim.peer_hosts import tbb_library
+
 
 @dataclass(frozen=True)
 class HostRun:
@@ -138,33 +140,6 @@ def run_ecos(fmu, *, step: float, stop_time: float, start_values=None, inputs=No
 
 
 HOSTS = {"fmpy": run_fmpy, "libcosim": run_libcosim, "ecos": run_ecos}
-
-
-def tbb_library() -> Path | None:
-    """libtbb.so.12 of the ``tbb`` wheel (the test extra), or None if it is not installed.
-
-    ecospy's native code links oneTBB. The wheel puts it in ``<prefix>/lib``, where the dynamic
-    linker does not look, so the tests need no Debian package (libtbb12) when they load it
-    themselves: ``preload_tbb`` for ecospy in this process, ``LD_LIBRARY_PATH`` for the ecos program.
-    """
-    from importlib import metadata
-
-    try:
-        files = metadata.files("tbb") or []
-    except metadata.PackageNotFoundError:
-        return None
-    found = [Path(f.locate()).resolve() for f in files if f.name == "libtbb.so.12"]
-    return found[0] if found and found[0].is_file() else None
-
-
-def preload_tbb() -> None:
-    """Load the wheel's libtbb.so.12 globally before ecospy is imported: the dynamic linker then
-    resolves ecospy's libtbb.so.12 to this loaded copy (by its soname) instead of searching for it."""
-    import ctypes
-
-    library = tbb_library()
-    if library is not None:
-        ctypes.CDLL(str(library), mode=ctypes.RTLD_GLOBAL)
 
 
 def _tbb_only_folder(workdir) -> dict:
