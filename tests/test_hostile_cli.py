@@ -63,10 +63,12 @@ DESIGN = [
     (["profile", "TP", "--mode", "1", "--distance", "nan", "--speed", "1"], "distance must be a finite real number"),
 ]
 PLANT = [
-    (["plant", "show", "missing.toml"], "missing.toml: cannot read plant model: No such file or directory"),
+    (["plant", "show", "missing.toml"], "missing.toml: no such file, and no shipped plant model of that name (shipped: disk_drive,"),
+    (["plant", "show", "results/missing.toml"], "results/missing.toml: cannot read plant model: No such file or directory"),
     (["plant", "show", "."], ".: cannot read plant model: Is a directory"),
     (["plant", "build", DISK, "-o", "out/plant.zip"], "the FMU name must end in .fmu"),
-    (["plant", "build", "missing.toml", "-o", "out/P.fmu"], "model file 'missing.toml' does not exist"),
+    (["plant", "build", "missing.toml", "-o", "out/P.fmu"], "missing.toml: no such file, and no shipped plant model of that name"),
+    (["plant", "build", "out/missing.toml", "-o", "out/P.fmu"], "model file 'out/missing.toml' does not exist"),
 ]
 MOVES = [
     (["optimal", DISK, "--distance", "nan"], "distance must be a finite real number, got nan"),
@@ -118,7 +120,8 @@ def simulate_cases(ssp):
         (run + ["--out", "."], 2, "the results file name must end in"),
         (run + ["--plot", "out/p.data"], 2, "the plot name must end in"),
         (run + ["--model-exchange", "shaper"], 2, "Shaper.fmu has no Model Exchange interface"),
-        (["simulate", "missing.ssp", "--stop", "1", "--step", "1"], 2, "SSP file not found: missing.ssp"),
+        (["simulate", "missing.ssp", "--stop", "1", "--step", "1"], 2, "missing.ssp: no such file, and no shipped SSP system"),
+        (["simulate", "out/missing.ssp", "--stop", "1", "--step", "1"], 2, "SSP file not found: out/missing.ssp"),
     ]
 
 

@@ -24,7 +24,8 @@ from shapefmu.shapers.catalog import check_sampling
 
 def _add_all(parser):
     parser.add_argument("-o", "--out", default="fmus", type=output_folder, help="output directory (default fmus/)")
-    parser.add_argument("--models", default="models", help="plant models to build as native FMUs (default models/)")
+    parser.add_argument("--models", help="folder of plant models to build as native FMUs "
+                        "(default: the papers' models that ship with shapefmu, see shapefmu plant list)")
 
 
 def _build_all(args):

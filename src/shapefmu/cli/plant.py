@@ -1,9 +1,19 @@
-"""``shapefmu plant show`` and ``plant build``: plant models and their native FMUs.
+"""``shapefmu plant list``, ``plant show`` and ``plant build``: plant models and their native FMUs.
+
+A model is a file (``models/disk_drive.toml``, a ``.py`` defining ``plant()``) or the name of one that
+ships with shapefmu (``disk_drive``): a path that exists wins.
 """
 
 from __future__ import annotations
 
 from shapefmu.cli.arguments import output_file
+
+
+def _cmd_plant_list(args) -> int:
+    from shapefmu.plants.shipped import describe
+
+    print(describe())
+    return 0
 
 
 def _cmd_plant_show(args) -> int:
@@ -24,13 +34,16 @@ def _cmd_plant_build(args) -> int:
 
 
 def register(commands) -> None:
-    p = commands.add_parser("plant", help="plant models (models/*.toml)")
+    p = commands.add_parser("plant", help="plant models (models/*.toml, or the name of a shipped one)")
     plant_commands = p.add_subparsers(dest="plant_command", required=True)
+    q = plant_commands.add_parser("list", help="the plant models and SSP systems that ship with shapefmu")
+    q.set_defaults(run=_cmd_plant_list)
     q = plant_commands.add_parser("show", help="print a plant model's signals, parameters and modes")
-    q.add_argument("file", help="plant model file, e.g. models/disk_drive.toml")
+    q.add_argument("file", help="plant model file or shipped name, e.g. models/disk_drive.toml or disk_drive")
     q.set_defaults(run=_cmd_plant_show)
     q = plant_commands.add_parser("build", help="generate and compile a native ME + CS plant FMU (FMI 2.0 or 3.0)")
-    q.add_argument("file", help="plant model: models/*.toml, or a .py file defining plant() (models/pendulum.py)")
+    q.add_argument("file", help="plant model: models/*.toml, a .py file defining plant() (models/pendulum.py), "
+                   "or a shipped name (disk_drive)")
     q.add_argument("-o", "--output", required=True, metavar="FMU", type=output_file(".fmu", what="FMU"),
                    help="FMU to write, e.g. fmus/DiskDrive.fmu")
     q.add_argument("--fmi-version", choices=("2.0", "3.0"), default="2.0", help="FMI version of the FMU (default 2.0)")

@@ -1,8 +1,9 @@
 """Plant models: linear models with named signals and physical parameters (``Plant``), the plants
-of the papers (``library``) and the declarative model files of ``models/`` (``loader``).
+of the papers (``library``), the declarative model files of ``models/`` (``loader``) and the ones
+that ship with shapefmu, found by name (``shipped``).
 
 Design layer: imports ``runtime`` and numpy / scipy / python-control; arrows run
-loader -> library -> model.
+loader -> library -> model, loader -> shipped.
 """
 
 from shapefmu.plants.library import (

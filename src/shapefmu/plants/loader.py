@@ -29,7 +29,7 @@ from dataclasses import dataclass
 
 import control
 
-from shapefmu.plants import library
+from shapefmu.plants import library, shipped
 from shapefmu.runtime.checks import check_text
 from shapefmu.plants.model import Parameter, Plant
 
@@ -228,8 +228,8 @@ def loads(text: str, source: str = "<string>") -> Plant:
 
 
 def load(path) -> Plant:
-    """Read a plant model file (``models/*.toml``)."""
-    path = os.fspath(path)
+    """Read a plant model file (``models/*.toml``), or the shipped model of that name (``disk_drive``)."""
+    path = os.fspath(shipped.find(path, (".toml",)))
     try:
         with open(path, encoding="utf-8") as handle:
             text = handle.read()

@@ -111,8 +111,11 @@ def fmu_file_name(model_name: str) -> str:
 
 def model_from_file(path):
     """The model a file holds: a model file (*.toml) as its path, or ``plant()`` of a Python model
-    file (*.py, e.g. models/pendulum.py); None for a Python file that defines no ``plant()``."""
-    path = Path(path)
+    file (*.py, e.g. models/pendulum.py), or the shipped model of that name (``pendulum``); None for a
+    Python file that defines no ``plant()``."""
+    from shapefmu.plants.shipped import find
+
+    path = find(path)
     if not path.is_file():
         raise ValueError(f"model file {str(path)!r} does not exist")
     if path.suffix == ".toml":
@@ -126,10 +129,13 @@ def model_from_file(path):
     return factory() if callable(factory) else None
 
 
-def build_all(models_dir, out_dir) -> list[Path]:
+def build_all(models_dir=None, out_dir="fmus") -> list[Path]:
     """Build one FMU per plant model in ``models_dir`` (every *.toml, and every *.py defining
-    ``plant()``) into ``out_dir``, named by ``fmu_file_name``; returns the paths."""
-    models_dir, out_dir = Path(models_dir), Path(out_dir)
+    ``plant()``; default: the models that ship with shapefmu) into ``out_dir``, named by
+    ``fmu_file_name``; returns the paths."""
+    from shapefmu.plants.shipped import models_folder
+
+    models_dir, out_dir = Path(models_dir) if models_dir is not None else models_folder(), Path(out_dir)
     if not models_dir.is_dir():
         raise ValueError(f"models_dir must be a directory, got {str(models_dir)!r}")
     built = []
