@@ -1,4 +1,7 @@
 """``shapefmu simulate`` and ``compare``: SSP systems of FMUs run by the co-simulation master.
+
+``--write-ssp FILE [--target omsimulator|libcosim]`` writes the system a command runs (with its
+experiment, and ``--set`` values as bindings), for OMSimulator or libcosim to open without Python.
 """
 
 from __future__ import annotations
@@ -13,6 +16,47 @@ import numpy as np
 from shapefmu.cli.arguments import output_file, output_folder
 
 
+def _system(name_or_path):
+    """The SSP file given, or the shipped example system of that name, which takes its FMUs from
+    ./fmus (where ``shapefmu build`` writes them)."""
+    from shapefmu.fmi.ssp import read_ssp
+    from shapefmu.plants.shipped import SYSTEM_SUFFIXES, find
+
+    path = find(name_or_path, SYSTEM_SUFFIXES, "SSP system")
+    if path == Path(name_or_path):
+        return read_ssp(path)
+    try:
+        return read_ssp(path, fmu_folder="fmus")
+    except ValueError as error:
+        raise ValueError(f"{error}; the shipped system {name_or_path!r} runs the FMUs of ./fmus: "
+                         f"run `shapefmu build` here first") from None
+
+
+def _write_ssp(system, args, parameters: dict) -> None:
+    """``simulate --write-ssp``: the system with this run's stop time and ``--set`` values, as an
+    .ssp archive (FMUs inside) or an .ssd file (FMUs where they are)."""
+    if args.write_ssp is None:
+        if args.target is not None or args.fold:
+            raise ValueError("--target and --fold apply to --write-ssp FILE, which is not given")
+        return
+    from shapefmu.fmi.ssp import write_system
+
+    path = write_system(system.for_experiment(args.stop, parameters), args.write_ssp, args.target, args.step,
+                        _fold(args.fold))
+    print(f"system written to {path}" + (f" for {args.target}" if args.target else ""))
+
+
+def _fold(items: list[str]) -> dict:
+    """``--fold shaper.y=u`` / ``--fold plant.voltage=b2,b4[1]``: ``{connector: [parameters]}``."""
+    fold = {}
+    for item in items:
+        connector, equals, names = item.partition("=")
+        if not equals or not connector or not names:
+            raise ValueError(f"--fold must be component.output=PARAMETER[,PARAMETER...], got {item!r}")
+        fold[connector] = names.split(",")
+    return fold
+
+
 def _cmd_simulate(args) -> int:
     from shapefmu.cosim import CosimError, CosimInterrupted, Master, save_results
 
@@ -22,10 +66,12 @@ def _cmd_simulate(args) -> int:
         if not equals:
             raise ValueError(f"--set must be component.variable=VALUE, got {item!r}")
         parameters[name] = value  # typed by the model description: a number, true/false, an item, text
+    system = _system(args.system)
+    _write_ssp(system, args, parameters)
     master = None
     with _interrupts() as received:
         try:
-            with Master(args.system, args.step, algorithm=args.algorithm, record=args.record,
+            with Master(system, args.step, algorithm=args.algorithm, record=args.record,
                         output_interval=args.output_interval, model_exchange=args.model_exchange,
                         progress=args.progress) as master:
                 try:
@@ -119,17 +165,33 @@ def _print_fmu_warnings(master) -> None:
 def _cmd_compare(args) -> int:
     from shapefmu.cosim.compare import compare
 
+    if args.target is not None and args.write_ssp is None:
+        raise ValueError("--target applies to --write-ssp FILE, which is not given")
     comparison = compare(args.file, args.distance, candidates=args.candidate or None, step=args.step, cache=args.fmus,
-                         u_max=args.u_max, tolerance=args.tolerance, plot=args.plot)
+                         u_max=args.u_max, tolerance=args.tolerance, plot=args.plot, write_ssp=args.write_ssp,
+                         target=args.target)
     print(comparison.table())
     if args.plot:
         print(f"plot written to {args.plot}")
+    for path in comparison.written:
+        print(f"system written to {path}" + (f" for {args.target}" if args.target else ""))
     return 0
+
+
+def _add_write_ssp(parser, fold: bool) -> None:
+    from shapefmu.fmi.ssp_targets import TARGETS
+
+    parser.add_argument("--write-ssp", metavar="FILE", type=output_file(".ssp", ".ssd", what="SSP file"),
+                        help="also write the system run, with its experiment: .ssp (FMUs inside) or .ssd")
+    parser.add_argument("--target", choices=TARGETS, help="write --write-ssp for this tool (with the macro step)")
+    if fold:
+        parser.add_argument("--fold", action="append", default=[], metavar="COMP.OUT=PARAM[,PARAM]",
+                            help="--target omsimulator: fold a connection's factor into these parameters; repeat")
 
 
 def register(commands) -> None:
     p = commands.add_parser("simulate", help="run an SSP system of FMUs with the co-simulation master")
-    p.add_argument("system", help="SSP system (.ssp archive or .ssd file)")
+    p.add_argument("system", help="SSP system (.ssp archive or .ssd file), or a shipped one by name (shapefmu plant list)")
     p.add_argument("--stop", type=float, required=True, help="stop time in s")
     p.add_argument("--step", type=float, required=True, help="macro (communication) step in s")
     p.add_argument("--record", action="append", metavar="COMP.VAR", help="variable to record; repeat (default: every output)")
@@ -142,12 +204,13 @@ def register(commands) -> None:
                    help="save the results as .csv or .parquet (checked before the run)")
     p.add_argument("--plot", metavar="PNG", type=output_file("plot"), help="plot every recorded variable against time")
     p.add_argument("--progress", action="store_true", help="show a progress bar")
+    _add_write_ssp(p, fold=True)
     p.set_defaults(run=_cmd_simulate)
 
     from shapefmu.cosim.compare import CANDIDATES
 
     p = commands.add_parser("compare", help="one plant, every candidate command, co-simulated as FMUs side by side")
-    p.add_argument("file", help="plant model in the form of eq. (1) of paper 002, e.g. models/disk_drive.toml")
+    p.add_argument("file", help="plant model in the form of eq. (1) of paper 002, e.g. models/disk_drive.toml or disk_drive")
     p.add_argument("--distance", type=float, required=True, help="move distance of the rigid body")
     p.add_argument("--candidate", action="append", choices=CANDIDATES, help="candidate to run; repeat (default: all)")
     p.add_argument("--step", type=float, default=1e-6, help="macro step and sampling period of every FMU in s (default 1e-6)")
@@ -157,4 +220,5 @@ def register(commands) -> None:
     p.add_argument("--tolerance", type=float, default=1e-3, help="settling band of the move time, relative to X and U")
     p.add_argument("--plot", metavar="PNG", type=output_file("plot"),
                    help="save u, position error and deflection of every candidate")
+    _add_write_ssp(p, fold=False)
     p.set_defaults(run=_cmd_compare)

@@ -33,6 +33,7 @@ which STOS needs; the same FMU drives every candidate, so they all meet the same
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import hashlib
 import json
@@ -138,11 +139,18 @@ class FMUCache:
             self._stamps_path.write_text(json.dumps(self._stamps, indent=1, sort_keys=True))
         return path
 
-    def slave(self, name: str) -> Path:
-        """``<name>.fmu`` for a slave of ``shapefmu.fmi.python.slaves`` (e.g. "Shaper", "STOSController")."""
+    def slave(self, name: str, **start_values) -> Path:
+        """``<name>.fmu`` for a slave of ``shapefmu.fmi.python.slaves`` (e.g. "Shaper", "STOSController");
+        with ``start_values``, a copy with those baked in, ``<name>_<digest>.fmu``."""
         from shapefmu.fmi.python.builder import build_fmu, bundled_sources, package_name
 
-        return self._cached(f"{name}.fmu", package_name(bundled_sources(name)), lambda path: build_fmu(name, path))
+        fingerprint = package_name(bundled_sources(name))
+        file_name = f"{name}.fmu"
+        if start_values:
+            baked = json.dumps(start_values, sort_keys=True)
+            file_name = f"{name}_{hashlib.sha256(baked.encode()).hexdigest()[:12]}.fmu"
+            fingerprint += baked
+        return self._cached(file_name, fingerprint, lambda path: build_fmu(name, path, **start_values))
 
     def plant(self, plant) -> Path:
         """The measured plant FMU (``measured_plant``) of a Plant or model file, e.g. DiskDriveMeasured.fmu."""
@@ -217,6 +225,7 @@ class Comparison:
     optimal_time: float
     runs: tuple[CandidateRun, ...]
     command: str  # the plant input recorded in every run
+    written: tuple[Path, ...] = ()  # each candidate's system, where compare(write_ssp=...) wrote it
 
     def run(self, name: str) -> CandidateRun:
         for run in self.runs:
@@ -254,7 +263,7 @@ def _modes_hz(plant) -> dict:
 
 def compare(plant_model, distance: float, candidates=CANDIDATES, step: float = 1e-6, *, cache="fmus",
             u_max: float | None = None, tolerance: float = 1e-3, stop_time: float | None = None,
-            plot=None) -> Comparison:
+            plot=None, write_ssp=None, target: str | None = None) -> Comparison:
     """Run the plant with each candidate command as an SSP system of FMUs; see the module docstring.
 
     ``plant_model``: a model file or Plant of paper 002's eq. (1) form (a rigid body and 1-4 modes).
@@ -262,10 +271,13 @@ def compare(plant_model, distance: float, candidates=CANDIDATES, step: float = 1
     ``cache``: folder of the FMUs (``FMUCache``). ``tolerance``: the settling band of the move time,
     relative to |X| and U. ``stop_time``: length of each run (default: the slowest open-loop move,
     a quarter more, and two periods of the slowest mode). ``plot``: a PNG path for u(t), x_r(t) and
-    the deflections of every candidate.
+    the deflections of every candidate. ``write_ssp``: a path ``dir/name.ssp`` (or ``.ssd``); each
+    candidate's system, with its experiment, is written to ``dir/name_<candidate>.ssp`` for
+    ``target`` (None, "libcosim" or "omsimulator", with the macro step ``step``; see
+    :func:`shapefmu.fmi.ssp.write_system`), and ``Comparison.written`` lists the files.
     """
     from shapefmu.cosim.master import Master
-    from shapefmu.fmi.ssp import System
+    from shapefmu.fmi.ssp import System, write_system
     from shapefmu.optimal import rigid_bang_bang, time_optimal
     from shapefmu.plants import as_plant
     from shapefmu.stos import rigid_body, shaper_for
@@ -308,7 +320,7 @@ def compare(plant_model, distance: float, candidates=CANDIDATES, step: float = 1
         with Master(sys_, step, record=[command, *outputs, *extra]) as master:
             return master.run(start + stop_time)
 
-    runs = []
+    runs, written = [], []
     for name in candidates:
         start, extra = 0.0, ()
         if name in ("bang-bang", "time-optimal"):
@@ -326,6 +338,12 @@ def compare(plant_model, distance: float, candidates=CANDIDATES, step: float = 1
             sys_ = _ekf_tuned_system(system(name), fmus, both, distance, step, modes, command)
             extra = ("tuner.omega_est", "tuner.zeta_est", "tuner.converged")
         results = run_system(sys_, start, extra)
+        if write_ssp is not None:
+            path = Path(write_ssp)
+            if target == "omsimulator":
+                sys_ = _strings_baked_in(sys_, fmus)
+            written.append(write_system(sys_.for_experiment(start + stop_time), path.with_stem(f"{path.stem}_{name.replace('-', '_')}"),
+                                        target, step if target else None))
         if start > 0.0:
             # The plant is linear: remove what is left of the identification move's ring-down
             # (that move alone through the same tuner, which passes it unshaped and one step late
@@ -349,10 +367,27 @@ def compare(plant_model, distance: float, candidates=CANDIDATES, step: float = 1
     reference = next((m.move_time for name, m, *_ in measured if name == "time-optimal"), optimal.T)
     comparison = Comparison(plant.name, distance, u_max, step, optimal.T,
                             tuple(CandidateRun(name, m, m.move_time / reference, r, s) for name, m, r, s in measured),
-                            command)
+                            command, tuple(written))
     if plot is not None:
         plot_compare(comparison, plot)
     return comparison
+
+
+def _strings_baked_in(system, fmus: FMUCache):
+    """``system`` with each slave's String bindings baked into a copy of its FMU as start values:
+    OMSimulator imports no String binding (see :mod:`shapefmu.fmi.ssp_targets`)."""
+    result = copy.copy(system)
+    result.components = {}
+    for name, component in system.components.items():
+        strings = {k: v for k, v in component.parameters.items() if component.connectors[k].type == "String"}
+        if strings:
+            component = copy.copy(component)
+            component.fmu = fmus.slave(component.fmu.stem, **strings)
+            component.parameters = {k: v for k, v in component.parameters.items() if k not in strings}
+            component.connectors = {k: dataclasses.replace(c, start=strings[k]) if k in strings else c
+                                    for k, c in component.connectors.items()}
+        result.components[name] = component
+    return result
 
 
 def stos_system(plant, distance: float, Ts: float, fmus: FMUCache, u_max: float | None = None,

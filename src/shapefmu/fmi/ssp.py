@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import atexit
 import copy
+import math
 import os
 import shutil
 import tempfile
@@ -175,6 +176,24 @@ class System:
         values.update(item.parameters)
         return values
 
+    def for_experiment(self, stop_time: float, parameters: dict | None = None) -> System:
+        """A copy of the system for one experiment: run from its start time to ``stop_time``, with
+        ``{"component.variable": value}`` added to the components' bindings (typed by each FMU's
+        variable, as ``--set`` values are), so a file written from it runs the same experiment."""
+        if not (isinstance(stop_time, (int, float)) and math.isfinite(stop_time) and stop_time > self.start_time):
+            raise ValueError(f"stop_time must be a finite number > start time {self.start_time!r} s, got {stop_time!r}")
+        result = copy.copy(self)
+        result.components = {name: copy.copy(c) for name, c in self.components.items()}
+        result.stop_time = float(stop_time)
+        for reference, value in (parameters or {}).items():
+            name, variable = _split(reference, "parameter name")
+            if name not in result.components:
+                raise ValueError(f"parameter {reference!r} names unknown component {name!r}")
+            component = result.components[name]
+            component.parameters = {**component.parameters,
+                                    **self._checked_parameters(component, {variable: value}, f"component {name!r}")}
+        return result
+
     def validate(self) -> System:
         """Check every component's FMU exists and every connection fits; return self."""
         for component in self.components.values():
@@ -298,13 +317,25 @@ class System:
                 enumeration = ET.SubElement(node, f"{{{SSC}}}Enumeration", {"name": name})
                 for item, value in items.items():
                     ET.SubElement(enumeration, f"{{{SSC}}}Item", {"name": item, "value": str(value)})
-        experiment = {"startTime": repr(self.start_time)}
-        if self.stop_time is not None:
-            experiment["stopTime"] = repr(self.stop_time)
+        # Both times, always: pyssp-standard and OMSimulator's Python API read both. A system built
+        # for no particular experiment gets the FMI tools' default length, 1 s from its start (what
+        # fmpy's simulate_fmu and OMSimulator take when a model names none).
+        stop = self.stop_time if self.stop_time is not None else self.start_time + 1.0
+        experiment = {"startTime": repr(self.start_time), "stopTime": repr(stop)}
         ET.SubElement(root, f"{{{SSD}}}DefaultExperiment", experiment).extend(copy.deepcopy(self.experiment_annotations))
         root.extend(copy.deepcopy(self.annotations))
         ET.indent(root)
         return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
+
+
+def write_system(system: System, path, target: str | None = None, step: float | None = None, fold: dict | None = None) -> Path:
+    """``system`` to ``path``: an .ssp archive (the FMUs and .ssv files inside) or an .ssd file (they
+    stay where they are), for ``target`` (None, "libcosim", "omsimulator"; see :mod:`.ssp_targets`),
+    whose ``step`` (and ``fold``) it takes."""
+    path = Path(path)
+    options = {"target": target, "step": step, "fold": fold} if target is not None else {}
+    path.parent.mkdir(parents=True, exist_ok=True)
+    return system.write_ssp(path, **options) if path.suffix.lower() == ".ssp" else system.write_ssd(path, **options)
 
 
 def _unique_name(names: dict[Path, str], file: Path, component: str) -> str:
@@ -389,11 +420,13 @@ def _parameter_values(parameter_set: ET.Element, where: str) -> dict:
     return values
 
 
-def read_ssp(path) -> System:
+def read_ssp(path, fmu_folder=None) -> System:
     """Read an .ssp archive or an .ssd file (or a folder holding SystemStructure.ssd) into a System.
 
     The members of an archive that the system uses are extracted, within the size limits, to a
     temporary folder that lives as long as the process (see :mod:`shapefmu.fmi.archives`).
+    ``fmu_folder``: take each component's FMU from that folder by its file name instead of where its
+    source points (a shipped example system runs with the FMUs ``shapefmu build`` wrote to ./fmus).
     """
     path = Path(path)
     if not path.exists():
@@ -406,8 +439,8 @@ def read_ssp(path) -> System:
         folder = Path(tempfile.mkdtemp(prefix=f"shapefmu_ssp_{path.stem}_"))
         _TEMPORARY_FOLDERS.append(folder)
         ssd = extract_system(path, folder)
-        return _read_ssd(ssd, origin=f"{path}!SystemStructure.ssd")
-    return _read_ssd(path, origin=str(path))
+        return _read_ssd(ssd, origin=f"{path}!SystemStructure.ssd", fmu_folder=fmu_folder)
+    return _read_ssd(path, origin=str(path), fmu_folder=fmu_folder)
 
 
 _TEMPORARY_FOLDERS: list[Path] = []
@@ -421,7 +454,7 @@ def _remove_temporary_folders() -> None:
 atexit.register(_remove_temporary_folders)
 
 
-def _read_ssd(ssd: Path, origin: str) -> System:
+def _read_ssd(ssd: Path, origin: str, fmu_folder=None) -> System:
     try:
         root = ET.parse(ssd).getroot()
     except ET.ParseError as error:
@@ -443,9 +476,10 @@ def _read_ssd(ssd: Path, origin: str) -> System:
             raise ValueError(f"{where}: needs both a name and a source")
         if name in system.components:
             raise ValueError(f"{where}: a component of that name already exists")
-        fmu = (base / source).resolve()
+        fmu = (base / source if fmu_folder is None else Path(fmu_folder) / Path(source).name).resolve()
         if not fmu.is_file():
-            raise ValueError(f"{where}: FMU file not found: {source} (looked in {base})")
+            looked = base if fmu_folder is None else Path(fmu_folder).resolve()
+            raise ValueError(f"{where}: FMU file not found: {source} (looked in {looked})")
         connectors = _fmu_connectors(fmu)
         declared = _child(item, "Connectors")
         for connector in _children(declared, "Connector") if declared is not None else []:

@@ -1,4 +1,10 @@
-"""SSP systems rewritten for a consumer that reads less of SSP 1.0 than libcosim and ecos do.
+"""SSP systems written for one consumer: libcosim's fixed step, or OMSimulator, which reads less of
+SSP 1.0 than libcosim and ecos do.
+
+``System.write_ssd(path, target="libcosim", step=1e-6)`` adds the Open Simulation Platform's
+annotation of the default experiment, ``<osp:Algorithm><osp:FixedStepAlgorithm baseStepSize=".."/>``,
+so libcosim (``cosim run``, ``CosimExecution.from_ssp_file`` without a step) runs the file with the
+macro step it was written for.
 
 ``System.write_ssd(path, target="omsimulator", step=1e-6, fold={...})`` writes what OpenModelica's
 OMSimulator imports and runs as it is meant:
@@ -26,25 +32,35 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import math
 from xml.etree import ElementTree as ET
 
-TARGETS = ("omsimulator",)
+TARGETS = ("omsimulator", "libcosim")
 OMS = "https://raw.githubusercontent.com/OpenModelica/OMSimulator/master/schema/oms.xsd"
+OSP = "http://opensimulationplatform.com/SSP/OSPAnnotations"
 _SSC = "http://ssp-standard.org/SSP1/SystemStructureCommon"
 _SSD = "http://ssp-standard.org/SSP1/SystemStructureDescription"
 ET.register_namespace("oms", OMS)
+ET.register_namespace("osp", OSP)
 
 
 def for_target(system, target: str | None, step: float | None = None, fold: dict | None = None):
-    """``system`` as written for ``target`` (None: unchanged; "omsimulator": see the module docstring)."""
+    """``system`` as written for ``target`` (None: unchanged; see the module docstring)."""
     if target is None:
         if step is not None or fold:
-            raise ValueError("step and fold apply to target='omsimulator' only, got target=None")
+            raise ValueError("step and fold apply to a target ('omsimulator' or 'libcosim') only, got target=None")
         return system
     if target not in TARGETS:
         raise ValueError(f"target must be None or one of {TARGETS}, got {target!r}")
-    if not (isinstance(step, (int, float)) and step > 0):
-        raise ValueError(f"target 'omsimulator' needs step, the fixed macro step in s (> 0), got {step!r}")
+    if not (isinstance(step, (int, float)) and math.isfinite(step) and step > 0):
+        raise ValueError(f"target {target!r} needs step, the fixed macro step in s (> 0), got {step!r}")
+    if target == "libcosim":
+        if fold:
+            raise ValueError("fold applies to target 'omsimulator' only: libcosim runs linear transformations itself")
+        result = copy.copy(system)
+        result.experiment_annotations = [_annotation(f'<osp:Algorithm><osp:FixedStepAlgorithm baseStepSize="{float(step)!r}"/>'
+                                                     f'</osp:Algorithm>', "com.opensimulationplatform", OSP, "osp")]
+        return result
     return _omsimulator(system, float(step), dict(fold or {}))
 
 
@@ -124,8 +140,9 @@ def _attribute(text: str) -> str:
     return text.replace("&", "&amp;").replace('"', "&quot;").replace("<", "&lt;")
 
 
-def _annotation(body: str) -> ET.Element:
-    """``<ssd:Annotations><ssc:Annotation type="org.openmodelica"><oms:Annotations>body``."""
-    return ET.fromstring(f'<ssd:Annotations xmlns:ssd="{_SSD}" xmlns:ssc="{_SSC}" xmlns:oms="{OMS}">'
-                         f'<ssc:Annotation type="org.openmodelica"><oms:Annotations>{body}</oms:Annotations>'
-                         f'</ssc:Annotation></ssd:Annotations>')
+def _annotation(body: str, kind: str = "org.openmodelica", namespace: str = OMS, prefix: str = "oms") -> ET.Element:
+    """``<ssd:Annotations><ssc:Annotation type="kind">body`` (OMSimulator's: in ``oms:Annotations``)."""
+    if kind == "org.openmodelica":
+        body = f"<oms:Annotations>{body}</oms:Annotations>"
+    return ET.fromstring(f'<ssd:Annotations xmlns:ssd="{_SSD}" xmlns:ssc="{_SSC}" xmlns:{prefix}="{namespace}">'
+                         f'<ssc:Annotation type="{kind}">{body}</ssc:Annotation></ssd:Annotations>')
