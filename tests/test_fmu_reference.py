@@ -106,7 +106,7 @@ def test_build_reference_refuses_a_missing_file(tmp_path, capsys):
     with pytest.raises(SystemExit) as exit_status:
         main(["build", "reference", str(tmp_path / "none.json"), "-o", str(tmp_path / "x.fmu")])
     assert exit_status.value.code == 2
-    assert "cannot read table" in capsys.readouterr().err
+    assert "cannot read signal table" in capsys.readouterr().err
 
 
 def test_cli_optimal_json_builds_a_player_of_that_solution(tmp_path):

@@ -93,7 +93,7 @@ BUILD = [
     (["build", "shaper", *["--mode", "10"] * 5, "-o", "out/S.fmu"], "--mode may be given at most 4 times, got 5"),
     (["build", "shape-filter", "--kind", "hanning", "--mode", "10", "--order", "1000", "--adjust-ts",
       "-o", "out/F.fmu"], "multiply-adds, more than the limit of 50,000,000"),
-    (["build", "reference", "missing.json", "-o", "out/R.fmu"], "cannot read table missing.json"),
+    (["build", "reference", "missing.json", "-o", "out/R.fmu"], "missing.json: cannot read signal table: No such file"),
     (["build", "all", "-o", DISK], "is a file; give a folder"),
 ]
 
@@ -138,7 +138,7 @@ def test_sweep_refuses_malformed_values(shaper_ssp, workdir):
         (["--vary", "shaper.u0=0:1:0"], "the number of points of shaper.u0 must be >= 1"),
         (["--sample", "shaper.u0=1:0", "--samples", "3"], "finite LOW < HIGH"),
         (["--vary", "shaper.u0=0:1:2", "--timeout", "-1"], "timeout must be > 0"),
-        (["--vary", "shaper.u0=0:1:2", "--workers", "-1"], "n_workers must be an integer >= 1"),
+        (["--vary", "shaper.u0=0:1:2", "--workers", "-1"], "--workers must be an integer >= 1"),
         (["--vary", "shaper.u0=0:1:2", "--plot", "map.csv"], "the plot name must end in"),
     ]:
         assert_refused(base + extra, 2, words, workdir)

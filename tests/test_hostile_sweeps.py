@@ -107,8 +107,9 @@ def sweep_cli(ssp, *extra):
 
 
 @pytest.mark.parametrize("extra, words", [
-    (["--vary", "shaper.u0=0:1:2", "--workers", "-1"], "n_workers must be an integer >= 1"),
-    (["--vary", "shaper.u0=0:1:2", "--workers", "0"], "n_workers must be an integer >= 1"),
+    (["--vary", "shaper.u0=0:1:2", "--workers", "-1"], "--workers must be an integer >= 1"),
+    (["--vary", "shaper.u0=0:1:2", "--workers", "0"], "--workers must be an integer >= 1"),
+    (["--vary", "shaper.u0=0:1:2", "--workers", "500"], "--workers must be at most"),
     (["--vary", "shaper.nope=0:1:2"], "component 'shaper' of "),
     (["--vary", "plant.u0=0:1:2"], "must be component.variable with a component of"),
     (["--vary", "shaper.u0=0:1:2", "--algorithm", "newton"], "argument --algorithm: invalid choice: 'newton'"),

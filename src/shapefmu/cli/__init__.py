@@ -26,18 +26,21 @@ element or parameter and the valid range, never a traceback. Exit codes:
   (a malformed model, system or FMU, a corrupt archive), or a size past ``runtime.limits``;
 - 1: what was given is right but the work failed: an FMU failed during a run, every run of a sweep
   failed, or the operating system refused to read or write a file (OSError);
-- 130 (Ctrl-C) and 143 (SIGTERM) for an interrupted ``simulate``, which saves what it recorded.
+- 130 (Ctrl-C) and 143 (SIGTERM) for an interrupted command (``simulate`` saves what it recorded,
+  marked partial; every command removes its temporary folders: see ``signals``).
 """
 
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
 import zipfile
 import zlib
 
 from shapefmu import __version__
 from shapefmu.cli import build, design, moves, plant, simulate, sweep
+from shapefmu.cli.signals import exit_code, interrupts
 from shapefmu.cosim.errors import CosimError
 
 # The order of the groups in ``shapefmu --help``.
@@ -82,11 +85,15 @@ def _explain(error: BaseException) -> tuple[int, str]:
 def main(argv=None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
-    try:
-        return args.run(args)
-    except _BAD_INPUT + _FAILED as error:
-        code, message = _explain(error)
-        parser.exit(code, f"shapefmu {args.command}: error: {message}\n")
+    with interrupts() as received:
+        try:
+            return args.run(args)
+        except _BAD_INPUT + _FAILED as error:
+            code, message = _explain(error)
+            parser.exit(code, f"shapefmu {args.command}: error: {message}\n")
+        except KeyboardInterrupt:  # Ctrl-C or SIGTERM outside a run loop (see .signals)
+            name = signal.Signals(received[-1]).name if received else "SIGINT"
+            parser.exit(exit_code(received), f"shapefmu {args.command}: interrupted ({name})\n")
 
 
 if __name__ == "__main__":

@@ -78,6 +78,12 @@ def output_folder(text: str) -> str:
 
 
 def _check_writable(path: Path, text: str) -> None:
+    from shapefmu.cosim.output_files import check_output
+
+    try:  # a link, a FIFO or a device, a name the file system cannot hold
+        check_output(path, "file")
+    except ValueError as error:
+        raise argparse.ArgumentTypeError(str(error)) from None
     if path.is_dir():
         raise argparse.ArgumentTypeError(f"{text!r} is a folder; give a file name")
     folder = path.parent

@@ -87,10 +87,7 @@ def _build_reference(args):
 
     from shapefmu.runtime import reference_player
 
-    try:
-        table = reference_player.load(args.table, args.interpolation)
-    except OSError as error:
-        raise ValueError(f"cannot read table {args.table}: {error.strerror}") from None
+    table = reference_player.load(args.table, args.interpolation)  # read and checked (a regular file, its size)
     if str(args.table).lower().endswith(".json"):
         text = Path(args.table).read_text(encoding="utf-8")  # keep the solution's own fields
     else:

@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from shapefmu.cli.arguments import output_file, output_folder
+from shapefmu.cli.signals import deferred, exit_code, interrupts
 
 
 def _system(name_or_path):
@@ -58,7 +59,8 @@ def _fold(items: list[str]) -> dict:
 
 
 def _cmd_simulate(args) -> int:
-    from shapefmu.cosim import CosimError, CosimInterrupted, Master, save_results
+    from shapefmu.cosim import CosimError, CosimInterrupted, Master
+    from shapefmu.cosim.output_files import output_lock
 
     parameters = {}
     for item in args.set:
@@ -69,36 +71,53 @@ def _cmd_simulate(args) -> int:
     system = _system(args.system)
     _write_ssp(system, args, parameters)
     master = None
-    with _interrupts() as received:
-        try:
-            with Master(system, args.step, algorithm=args.algorithm, record=args.record,
-                        output_interval=args.output_interval, model_exchange=args.model_exchange,
-                        progress=args.progress) as master:
-                try:
-                    results, status = master.run(args.stop, parameters=parameters), 0
-                except (CosimError, CosimInterrupted) as error:
-                    results, status = error.partial, 1
-                    print(f"shapefmu simulate: {_failure(error, received)}", file=sys.stderr)
-                _print_fmu_warnings(master)
-        except KeyboardInterrupt:  # before the run started: nothing recorded
-            print("shapefmu simulate: interrupted before the run started", file=sys.stderr)
-            results, status = None, 130
-    if received:
-        status = 128 + received[0]  # 130 for Ctrl-C, 143 for SIGTERM, as a shell reports them
-    elif master is not None and master.termination is not None:
-        print(f"shapefmu simulate: {master.termination}: a normal end", file=sys.stderr)
-    if results is None or not len(results):  # failed or stopped before the first record
-        return status
+    with output_lock(args.out) if args.out else contextlib.nullcontext():  # one run writes a file at a time
+        with interrupts() as received:
+            try:
+                with Master(system, args.step, algorithm=args.algorithm, record=args.record,
+                            output_interval=args.output_interval, model_exchange=args.model_exchange,
+                            progress=args.progress) as master:
+                    try:
+                        results, status, stopped = master.run(args.stop, parameters=parameters), 0, None
+                    except (CosimError, CosimInterrupted) as error:
+                        results, status, stopped = error.partial, 1, _failure(error, received)
+                        print(f"shapefmu simulate: {stopped}", file=sys.stderr)
+                    _print_fmu_warnings(master)
+            except KeyboardInterrupt:  # before the run started: nothing recorded
+                print("shapefmu simulate: interrupted before the run started", file=sys.stderr)
+                results, status, stopped = None, 130, "interrupted"
+        if received:
+            status = exit_code(received)  # 130 for Ctrl-C, 143 for SIGTERM, as a shell reports them
+        elif master is not None and master.termination is not None:
+            print(f"shapefmu simulate: {master.termination}: a normal end", file=sys.stderr)
+        if results is None or not len(results):  # failed or stopped before the first record
+            return status
+        with deferred() as late:  # the files are written whole; a signal now takes effect after them
+            _report(results, args, stopped)
+    if late:
+        print(f"shapefmu simulate: {signal.Signals(late[-1]).name} received while the results were written: "
+              f"they were written whole", file=sys.stderr)
+        return exit_code(late)
+    return status
+
+
+def _report(results, args, stopped: str | None) -> None:
+    """Print the run's summary, save ``--out`` (marked partial when the run ``stopped`` early) and ``--plot``."""
+    from shapefmu.cosim import save_results
+
     last = results[-1]
-    print(f"{len(results)} records to t = {last['time']:.9g} s")
+    print(f"{len(results)} records to t = {last['time']:.9g} s" + (" (partial: the run stopped early)" if stopped else ""))
     for name in results.dtype.names[1:]:
         if results.dtype[name].kind in "fiu":
             print(f"  {name:30s} final {last[name]: .9g}   peak |.| {np.max(np.abs(results[name])):.6g}")
         else:
             print(f"  {name:30s} final {last[name]!s}")
     if args.out:
-        Path(args.out).parent.mkdir(parents=True, exist_ok=True)
-        print(f"results written to {save_results(results, args.out)}")
+        path = save_results(results, args.out, partial=stopped)
+        if stopped:
+            print(f"shapefmu simulate: {path} holds partial results, to t = {last['time']:.9g} s "
+                  f"(its last line says so)", file=sys.stderr)
+        print(f"results written to {path}")
     if args.plot and not any(results.dtype[name].kind in "fiub" for name in results.dtype.names[1:]):
         print("no numeric variable recorded: no plot written")
     elif args.plot:
@@ -117,29 +136,6 @@ def _cmd_simulate(args) -> int:
         Path(args.plot).parent.mkdir(parents=True, exist_ok=True)
         figure.savefig(args.plot)
         print(f"plot written to {args.plot}")
-    return status
-
-
-@contextlib.contextmanager
-def _interrupts():
-    """Ctrl-C and SIGTERM (``kill``, ``timeout``, a batch system ending a job) stop a run alike, so
-    the results recorded so far are saved; yields the list of signals received."""
-    received = []
-
-    def interrupt(signum, frame):
-        received.append(signum)
-        raise KeyboardInterrupt
-
-    try:
-        previous = {number: signal.signal(number, interrupt) for number in (signal.SIGINT, signal.SIGTERM)}
-    except ValueError:  # not the main thread (shapefmu.cli.main called from a worker): leave them alone
-        yield received
-        return
-    try:
-        yield received
-    finally:
-        for number, handler in previous.items():
-            signal.signal(number, handler)
 
 
 def _failure(error, received) -> str:

@@ -26,6 +26,7 @@ def _cmd_sweep(args) -> int:
     record = args.record or variables
     if any(ch in o for o in args.outputs for ch in "*?[") and not args.record:
         raise ValueError(f"--outputs {args.outputs} uses patterns: name the variables to record with --record")
+    sweeps.check_workers(args.workers, "--workers")
     _check_variables(args.system, [*points.names, *record])
     target = sweeps.cosim(args.system, step=args.step, stop_time=args.stop_time, record=record,
                           algorithm=args.algorithm)

@@ -8,6 +8,7 @@ It may import ``shapefmu.fmi`` and the layers below (``compare`` uses the design
 """
 
 from shapefmu.cosim.errors import AlgebraicLoopError, CosimError, CosimInterrupted, Termination
-from shapefmu.cosim.master import ALGORITHMS, Master, save_results, simulate
+from shapefmu.cosim.master import ALGORITHMS, Master, simulate
+from shapefmu.cosim.output_files import save_results
 
 __all__ = ["ALGORITHMS", "AlgebraicLoopError", "CosimError", "CosimInterrupted", "Master", "Termination", "save_results", "simulate"]

@@ -307,9 +307,14 @@ class Master:
             self.reset()
         self._state = "running"
         span = (stop_time - t0) / self.step
+        check_size(span, "MAX_MACRO_STEPS", f"a run from {t0!r} s to {stop_time!r} s by steps of {self.step!r} s takes",
+                   "macro steps", "take a longer step or a shorter run")
         n_steps = max(1, math.ceil(span - 1e-9))
         last = n_steps - 1
-        rows = 1 + n_steps // self.output_interval + (1 if n_steps % self.output_interval else 0)
+        # An output interval longer than the run records its end only; the compiled loop's integers
+        # then stay within the run's step count (an interval of 1e300 s is no overflow).
+        every = min(self.output_interval, n_steps)
+        rows = 1 + n_steps // every + (1 if n_steps % every else 0)
         dtype = step_program.buffer_dtype(self)
         _check_result_size(rows, dtype.itemsize, len(self.record), stop_time - t0, self.step * self.output_interval)
         buf = np.empty(rows, dtype=dtype)
@@ -329,7 +334,7 @@ class Master:
             for k0 in range(0, n_steps if self.termination is None else 0, chunk):
                 t = t0 + k0 * self.step
                 k1 = min(n_steps, k0 + chunk)
-                self._row = self._run_chunk(k0, k1, self._row, t0, self.step, stop_time, last, buf, self.output_interval)
+                self._row = self._run_chunk(k0, k1, self._row, t0, self.step, stop_time, last, buf, every)
                 if bar:
                     bar.update(k1)
                 if self.termination is not None:
@@ -547,40 +552,3 @@ def _check_result_size(rows: int, row_bytes: int, variables: int, span: float, i
     check_size(rows * row_bytes, "MAX_RESULT_BYTES",
                f"recording {variables} variable(s) every {interval!r} s over {span!r} s ({rows:.4g} rows) needs",
                "bytes", "record fewer variables (--record) or less often (--output-interval)")
-
-
-def save_results(results: np.ndarray, path) -> Path:
-    """Write results to ``.csv`` (header = field names) or ``.parquet`` (needs pyarrow), each column
-    with its type: floats with 17 significant digits, integers, booleans (true/false), strings."""
-    path = Path(path)
-    names = results.dtype.names
-    if path.suffix == ".csv" and all(results.dtype[name] == np.float64 for name in names):
-        np.savetxt(path, results.view((np.float64, len(names))) if len(results) else np.empty((0, len(names))),
-                   delimiter=",", header=",".join(names), comments="", fmt="%.17g")  # fast for long float runs
-    elif path.suffix == ".csv":
-        import csv
-
-        formats = [_csv_format(results.dtype[name]) for name in names]
-        with open(path, "w", newline="") as handle:
-            writer = csv.writer(handle, lineterminator="\n")
-            writer.writerow(names)
-            for row in results:
-                writer.writerow([form(value) for form, value in zip(formats, row)])
-    elif path.suffix == ".parquet":
-        import pyarrow as pa
-        import pyarrow.parquet as pq
-
-        columns = {name: pa.array(results[name].tolist(), type=pa.string()) if results.dtype[name].kind == "O" else results[name]
-                   for name in names}
-        pq.write_table(pa.table(columns), path)
-    else:
-        raise ValueError(f"results path must end in .csv or .parquet, got {path.name!r}")
-    return path
-
-
-def _csv_format(dtype: np.dtype):
-    if dtype.kind == "f":
-        return lambda value: f"{value:.17g}"
-    if dtype.kind == "b":
-        return lambda value: "true" if value else "false"
-    return str

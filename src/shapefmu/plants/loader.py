@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import control
 
 from shapefmu.plants import library, shipped
-from shapefmu.runtime.checks import check_text
+from shapefmu.runtime.checks import check_text, parse_nested, read_text_file
 from shapefmu.plants.model import Parameter, Plant
 
 
@@ -181,7 +181,7 @@ def _signals(data, key, count, source):
 def loads(text: str, source: str = "<string>") -> Plant:
     """Parse a plant model from TOML text; ``source`` names the file in error messages."""
     try:
-        data = tomllib.loads(text)
+        data = parse_nested(tomllib.loads, text, source)
     except tomllib.TOMLDecodeError as error:
         raise ValueError(f"{source}: not valid TOML: {error}") from None
     allowed = {"name", "kind", "description", "source", "parameters", "inputs", "outputs"}
@@ -230,14 +230,7 @@ def loads(text: str, source: str = "<string>") -> Plant:
 def load(path) -> Plant:
     """Read a plant model file (``models/*.toml``), or the shipped model of that name (``disk_drive``)."""
     path = os.fspath(shipped.find(path, (".toml",)))
-    try:
-        with open(path, encoding="utf-8") as handle:
-            text = handle.read()
-    except OSError as error:
-        raise ValueError(f"{path}: cannot read plant model: {error.strerror}") from None
-    except UnicodeDecodeError as error:
-        raise ValueError(f"{path}: not a plant model (not UTF-8 text: {error.reason} at byte {error.start})") from None
-    return loads(text, source=path)
+    return loads(read_text_file(path, "plant model"), source=path)
 
 
 def as_plant(system) -> Plant:

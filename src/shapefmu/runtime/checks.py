@@ -91,3 +91,38 @@ def aliased_modes(modes, ts):
     on them (their samples alias onto a lower frequency), so a shaper for them leaves the mode ringing."""
     nyquist = math.pi / ts
     return [i for i, (omega, zeta) in enumerate(modes) if omega * math.sqrt(1.0 - zeta * zeta) >= nyquist]
+
+
+def read_text_file(path, what):
+    """The text of a file a user named (a model, a signal table, a sweep's rows): refused with a
+    one-line message if it is not a regular file (a FIFO or ``/dev/zero`` would block or never end),
+    if it holds more than ``limits.MAX_INPUT_FILE_BYTES``, or if it is not UTF-8."""
+    import os
+    import stat
+
+    name = os.fspath(path)
+    try:
+        with open(name, "rb") as stream:
+            status = os.fstat(stream.fileno())
+            if not stat.S_ISREG(status.st_mode):
+                raise ValueError(f"{name}: {what} must be a regular file, not a FIFO, device or folder")
+            check_size(status.st_size, "MAX_INPUT_FILE_BYTES", f"{name}: {what} of", "bytes",
+                       "give a smaller file")
+            data = stream.read(limits.MAX_INPUT_FILE_BYTES + 1)
+    except OSError as error:
+        raise ValueError(f"{name}: cannot read {what}: {error.strerror}") from None
+    check_size(len(data), "MAX_INPUT_FILE_BYTES", f"{name}: {what} of", "bytes", "give a smaller file")
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as error:
+        raise ValueError(f"{name}: not a {what} (not UTF-8 text: {error.reason} at byte {error.start})") from None
+
+
+def parse_nested(parse, text, what):
+    """``parse(text)`` (json.loads, tomllib.loads), with nesting deeper than Python's parsers can
+    follow refused as a ValueError naming ``what`` rather than a RecursionError."""
+    try:
+        return parse(text)
+    except RecursionError:
+        raise ValueError(f"{what} is nested deeper than can be read (a list or table inside "
+                         f"thousands of others)") from None

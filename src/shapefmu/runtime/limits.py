@@ -38,15 +38,31 @@ MAX_PLANT_STATES = 200
     n x n Jacobians and the zero-order-hold step computes an n x n matrix exponential; CasADi's
     code generation and gcc grow faster than n^2 (n = 100 takes 40 s to build here, n = 200 80 s).
 
+MAX_RK4_SUBSTEPS = 10_000_000
+    RK4 substeps of one Co-Simulation step of a nonlinear native plant (the step h split into
+    substeps no longer than its ``substep`` parameter; C: ``PLANT_MAX_SUBSTEPS`` in plant_model.h).
+    A substep costs four evaluations of the model, well under a microsecond for the pendulum, so the
+    bound keeps one step within seconds; past it (a step of 1e300 s, a substep of 1e-300 s) the count
+    overflowed and the step returned OK without integrating. Refused with fmi2Error and a message.
+
 Co-simulation results and sweeps (``cosim/``, ``sweep/``, ``stos.py``)
 ---------------------------------------------------------------------
 MAX_RESULT_BYTES = 2 * 2**30
     Bytes of the results one run records (rows x recorded variables x 8 B), estimated before the
     first step: the result is one array in memory. 2 GiB is 2.7e8 rows of one variable; a run that
     needs more is given a longer ``--output-interval`` or fewer ``--record`` variables.
+MAX_MACRO_STEPS = 2**53
+    Macro steps of one co-simulation run. The master computes t_k = t0 + k h from the step count k
+    in double precision, exact up to 2^53; a run that long (9e15 steps: 28 years at 10^7 steps per
+    second) is a mistake such as ``--stop 1e40 --step 1``.
 MAX_SWEEP_POINTS = 10_000_000
     Parameter points of one sweep: the grid is one array in memory, and every point is a run;
     ten million runs of even 1 ms are three hours on a core.
+MAX_WORKERS_PER_CORE = 4
+    Worker processes of a sweep's local Dask cluster per core of the machine. A worker is a Python
+    process of about 150 MB that runs one co-simulation at a time: past a few per core they only
+    wait for one another and fill the memory (500 on 2 cores took the machine down). A larger
+    cluster is a Dask scheduler's address.
 
 Sampled FMUs at run time (``runtime/sample_clock.py``; the native C FMUs use the same numbers)
 ----------------------------------------------------------------------------------------------
@@ -75,6 +91,10 @@ MAX_ARCHIVE_MEMBER_BYTES = 2**30
     the members a system uses are extracted at all.
 MAX_ARCHIVE_BYTES = 4 * 2**30
     Bytes all the members a system uses may extract to together.
+MAX_INPUT_FILE_BYTES = 2**30
+    Bytes of a text file a user names that shapefmu reads whole: a plant model (a few kB), a signal
+    table (10^6 rows are 40 MB), a sweep's rows to resume (10^7 points, the sweep limit, are about
+    1 GB). Only regular files are read: ``/dev/zero`` or a FIFO given as a model would never end.
 """
 
 MAX_IMPULSES = 10_000
@@ -82,9 +102,13 @@ MAX_ZV_DN_ORDER = 100
 MAX_SAMPLED_LENGTH = 1_000_000
 MAX_CONVOLUTION_PRODUCTS = 50_000_000
 MAX_PLANT_STATES = 200
+MAX_RK4_SUBSTEPS = 10_000_000
+MAX_MACRO_STEPS = 2**53
 MAX_RESULT_BYTES = 2 * 2**30
 MAX_SWEEP_POINTS = 10_000_000
+MAX_WORKERS_PER_CORE = 4
 MAX_ARCHIVE_MEMBER_BYTES = 2**30
 MAX_ARCHIVE_BYTES = 4 * 2**30
+MAX_INPUT_FILE_BYTES = 2**30
 SAMPLE_TOLERANCE = 1e-6
 MAX_SAMPLES_PER_STEP = 10_000_000

@@ -31,7 +31,7 @@ import io
 import json
 import math
 
-from .checks import check_finite
+from .checks import check_finite, parse_nested, read_text_file
 
 INTERPOLATIONS = ("hold", "linear")
 _SNAP = 1e-12
@@ -188,11 +188,10 @@ def from_csv(text, interpolation="hold", before=0.0):
 def load(path, interpolation="hold"):
     """Read a ``.json`` (from_dict) or ``.csv`` (from_csv, with ``interpolation``) signal table file."""
     name = str(path)
-    with open(name, encoding="utf-8") as stream:
-        text = stream.read()
+    text = read_text_file(name, "signal table")
     if name.lower().endswith(".json"):
         try:
-            data = json.loads(text)
+            data = parse_nested(json.loads, text, name)
         except json.JSONDecodeError as error:
             raise ValueError(f"{name} is not valid JSON: {error}") from None
         return from_dict(data)

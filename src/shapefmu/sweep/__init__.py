@@ -7,7 +7,7 @@ The experiments layer: may import ``shapefmu.cosim``, ``shapefmu.fmi``, ``shapef
 # Each module imports only modules listed before it: store, analytic, points, metrics, target (the
 # co-simulation target, its worker plugin and the masters a worker keeps open), runs (a batch of runs
 # on a worker), driver (sweep() and its Dask client), report (the map and the summary).
-from shapefmu.sweep.driver import SweepRows, sweep
+from shapefmu.sweep.driver import SweepRows, check_workers, sweep
 from shapefmu.sweep.metrics import NAMED_METRICS, Metric, move_end, move_time, named_metrics, peak, residual
 from shapefmu.sweep.points import Points, grid, parse_range, parse_vary, random_samples
 from shapefmu.sweep.report import plot_map, summary
@@ -18,6 +18,6 @@ from shapefmu.sweep.target import Cosim, cosim
 __all__ = [
     "FIXED_COLUMNS", "NAMED_METRICS", "STATUSES", "Cosim", "Metric", "Points", "RunTimeout", "Store", "SweepRows",
     "as_array",
-    "columns", "cosim", "grid", "metric_names_in_file", "move_end", "move_time", "named_metrics", "parse_range",
+    "check_workers", "columns", "cosim", "grid", "metric_names_in_file", "move_end", "move_time", "named_metrics", "parse_range",
     "parse_vary", "peak", "plot_map", "random_samples", "read_rows", "residual", "summary", "sweep",
 ]

@@ -35,6 +35,8 @@ from collections.abc import Mapping
 
 import numpy as np
 
+from shapefmu.cosim.output_files import check_output, output_lock
+from shapefmu.runtime import limits
 from shapefmu.runtime.checks import check_positive
 from shapefmu.sweep.metrics import _metric_list
 from shapefmu.sweep.points import Points, _points
@@ -92,6 +94,21 @@ class _Progress:
 # The sweep
 
 
+def check_workers(n_workers, name: str = "n_workers"):
+    """``n_workers`` if None or a count of local worker processes this machine can run: an integer
+    >= 1 and at most ``limits.MAX_WORKERS_PER_CORE`` per core (``name`` says what the caller called it)."""
+    if n_workers is None:
+        return None
+    if isinstance(n_workers, bool) or not isinstance(n_workers, int) or n_workers < 1:
+        raise ValueError(f"{name} must be an integer >= 1 (worker processes of the local cluster), got {n_workers!r}")
+    cores = os.cpu_count() or 1
+    if n_workers > limits.MAX_WORKERS_PER_CORE * cores:
+        raise ValueError(f"{name} must be at most {limits.MAX_WORKERS_PER_CORE * cores} worker processes on this "
+                         f"machine's {cores} core(s) (shapefmu.runtime.limits.MAX_WORKERS_PER_CORE = "
+                         f"{limits.MAX_WORKERS_PER_CORE}), got {n_workers}; a cluster takes a scheduler address")
+    return n_workers
+
+
 def _open_client(client, n_workers):
     """(client, cluster to close or None, whether we opened the client)."""
     from distributed import Client, LocalCluster
@@ -104,11 +121,18 @@ def _open_client(client, n_workers):
         raise ValueError(f"n_workers applies to the default local cluster only, got n_workers={n_workers} with "
                          f"client={client!r}")
     if isinstance(client, str):
-        return Client(client), None, True
+        try:  # a wrong address, or a server that is no Dask scheduler, times out here
+            return Client(client, timeout=SCHEDULER_TIMEOUT), None, True
+        except (OSError, TimeoutError) as error:
+            raise ValueError(f"scheduler {client!r}: no Dask scheduler answered within {SCHEDULER_TIMEOUT} s "
+                             f"({type(error).__name__}: {error})") from None
     if isinstance(client, Client):
         return client, None, False
     raise ValueError(f"client must be None, a scheduler address such as 'tcp://host:8786' or a distributed.Client, "
                      f"got {client!r}")
+
+
+SCHEDULER_TIMEOUT = 10  # s: a scheduler that answers at all answers in well under a second
 
 
 def _batches(todo: list[int], points: Points, size: int):
@@ -159,9 +183,7 @@ def sweep(target, points, *, metrics=None, out=None, client=None, n_workers: int
     metric_list = _metric_list(metrics)
     if timeout is not None:
         timeout = check_positive(timeout, "timeout")
-    if n_workers is not None and (isinstance(n_workers, bool) or not isinstance(n_workers, int) or n_workers < 1):
-        raise ValueError(f"n_workers must be an integer >= 1 (worker processes of the local cluster), "
-                         f"got {n_workers!r}")
+    check_workers(n_workers)
     if batch_size is not None and (isinstance(batch_size, bool) or not isinstance(batch_size, int) or batch_size < 1):
         raise ValueError(f"batch_size must be an integer >= 1, got {batch_size!r}")
     if isinstance(retries, bool) or not isinstance(retries, int) or retries < 0:
@@ -192,14 +214,25 @@ def _sweep_vectorized(func, points: Points, out) -> np.ndarray:
                      "error": "", "wall_time": elapsed / len(points)})
     header = columns(points.names, list(values))
     if out is not None:
-        store = Store(out, header, resume=False)
-        store.append(rows)
-        store.close(rows)
+        with output_lock(out):
+            Store(out, header, resume=False).close(rows)
     return as_array(rows, header)
 
 
 def _sweep_distributed(target, points, metric_list, out, client, n_workers, timeout, resume, progress,
                        batch_size, retries, retry_failed):
+    """One writer of ``out`` at a time (``output_lock``): a second sweep on the file is refused."""
+    if out is None:
+        return _sweep_into(target, points, metric_list, None, client, n_workers, timeout, resume, progress,
+                           batch_size, retries, retry_failed)
+    check_output(out, "sweep output")
+    with output_lock(out):
+        return _sweep_into(target, points, metric_list, out, client, n_workers, timeout, resume, progress,
+                           batch_size, retries, retry_failed)
+
+
+def _sweep_into(target, points, metric_list, out, client, n_workers, timeout, resume, progress,
+                batch_size, retries, retry_failed):
     key_of = {tuple(map(float, points.values[i])): i for i in range(len(points))}
     store = None
     rows_by_run: dict[int, dict] = {}
@@ -223,6 +256,8 @@ def _sweep_distributed(target, points, metric_list, out, client, n_workers, time
     todo = [i for i in range(len(points)) if i not in rows_by_run]
     meter = _Progress(len(points), len(rows_by_run), progress)
     c, cluster, opened = _open_client(client, n_workers) if todo else (None, None, False)
+    if store is not None:
+        store.open()  # the file changes only now: every check passed and the cluster answers
     try:
         unwritten = []  # rows that arrived before the metric names were known
         for rows in _run_on_cluster(c, target, points, todo, metric_list, timeout, batch_size, retries):
@@ -253,7 +288,7 @@ def _sweep_distributed(target, points, metric_list, out, client, n_workers, time
             c.close()
         if cluster is not None:
             cluster.close()
-        if store is not None:
+        if store is not None and store.file is not None:
             store.file.close()
     ordered = [rows_by_run[i] for i in range(len(points))]
     header = columns(points.names, metric_names)

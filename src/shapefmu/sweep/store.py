@@ -6,10 +6,14 @@ file is only readable once its footer is written). Both can be resumed after an 
 from __future__ import annotations
 
 import csv
+import io
 import os
 from pathlib import Path
 
 import numpy as np
+
+from shapefmu.cosim.output_files import check_output, replace_atomically
+from shapefmu.runtime.checks import read_text_file
 
 STATUSES = ("ok", "error", "timeout", "non-finite")
 FIXED_COLUMNS = ("run", "status", "error", "wall_time")
@@ -42,32 +46,45 @@ def _parse_row(raw: dict, columns: list[str]) -> dict | None:
 
 
 class Store:
-    """A sweep's rows on disk (see the module docstring). With ``resume`` the rows already there
-    are read into ``done`` in file order (a partial last line is dropped; an empty file or one cut
-    inside its header starts anew); otherwise the file is started anew. ``close(rows)`` writes the
-    file from all the sweep's rows, one per point."""
+    """A sweep's rows on disk (see the module docstring).
+
+    Nothing is written until :meth:`open`, and the constructor reads only: with ``resume`` the rows
+    already there are read into ``done`` in file order, after checking that the file is this
+    sweep's (a file of other columns, or not a sweep file at all, is refused and left as it is); an
+    empty file, or one cut inside its header by a kill, starts anew. ``open()`` then drops a last
+    line cut short by an interruption (without ``resume``: removes the old file) and appends;
+    ``close(rows)`` writes the file from all the sweep's rows, one per point. The caller holds the
+    file's lock (``shapefmu.cosim.output_files.output_lock``) from before the constructor to the end."""
 
     def __init__(self, out, columns: list[str], resume: bool):
-        self.out = Path(out)
+        self.out = check_output(out, "sweep output")
         if self.out.suffix not in (".csv", ".parquet"):
             raise ValueError(f"out must end in .csv or .parquet, got {str(self.out)!r}")
         self.columns = columns
+        self.resume = resume
         self.parquet = self.out.suffix == ".parquet"
-        self.journal = self.out.with_name(self.out.name + ".partial.csv") if self.parquet else self.out
-        self.out.parent.mkdir(parents=True, exist_ok=True)
+        self.journal = check_output(self.out.with_name(self.out.name + ".partial.csv"), "sweep journal") \
+            if self.parquet else self.out
         self.done = []
+        self._complete_bytes = None  # where a resumed journal's last complete line ends
+        self.file = None
         if resume:
             if self.parquet and self.out.exists():
                 self.done += self._read_parquet()
             if self.journal.exists():
                 self.done += self._read_csv(self.journal)
-        else:
+
+    def open(self) -> None:
+        """Start writing: the first (and only) change to the files (see the class docstring)."""
+        self.out.parent.mkdir(parents=True, exist_ok=True)
+        if not self.resume:
             for path in {self.out, self.journal}:
                 path.unlink(missing_ok=True)
-        # A file cut inside its header (killed while starting) is empty after _read_csv: it gets one.
+        elif self._complete_bytes is not None:
+            os.truncate(self.journal, self._complete_bytes)  # a sweep killed mid-write left a partial line
         new = not self.journal.exists() or self.journal.stat().st_size == 0
         self.file = open(self.journal, "a", newline="")
-        self.writer = csv.DictWriter(self.file, fieldnames=columns)
+        self.writer = csv.DictWriter(self.file, fieldnames=self.columns)
         if new:
             self.writer.writeheader()
             self.file.flush()
@@ -78,43 +95,59 @@ class Store:
                              f"{self.columns}; choose another out= or pass resume=False to overwrite it")
 
     def _read_csv(self, path) -> list[dict]:
-        # A sweep killed mid-write may leave a partial last line: drop it before appending.
-        text = path.read_text()
-        if text and not text.endswith("\n"):
-            text = text[: text.rfind("\n") + 1]
-            path.write_text(text)
-        reader = csv.DictReader(text.splitlines())
-        if reader.fieldnames is None:
+        text = read_text_file(path, "sweep file")
+        complete = text[: text.rfind("\n") + 1]
+        if len(complete) != len(text):
+            self._complete_bytes = len(complete.encode())
+        header = ",".join(self.columns)
+        if not complete:  # empty, or one line without its end: a header cut by a kill, or not a sweep file
+            if not header.startswith(text):
+                raise ValueError(f"cannot resume from {str(path)!r}: it is not a sweep file (its only line is "
+                                 f"{text[:60]!r}); choose another out=, or pass resume=False to overwrite it")
             return []
-        self._check_columns(reader.fieldnames, path)
-        return [row for row in (_parse_row(raw, self.columns) for raw in reader) if row is not None]
+        reader = csv.DictReader(io.StringIO(complete))
+        try:
+            self._check_columns(reader.fieldnames or [], path)
+            return [row for row in (_parse_row(raw, self.columns) for raw in reader) if row is not None]
+        except csv.Error as error:
+            # line_num counts the lines read whole: the error is in the next one
+            raise ValueError(f"{path}, line {reader.line_num + 1}: not a sweep row ({error})") from None
 
     def _read_parquet(self) -> list[dict]:
-        table = pyarrow_module().parquet.read_table(self.out)
+        pa = pyarrow_module()
+        try:
+            table = pa.parquet.read_table(self.out)
+        except (pa.ArrowException, OSError) as error:
+            raise ValueError(f"cannot resume from {str(self.out)!r}: it is not a Parquet file of sweep rows ({error}); "
+                             f"choose another out=, or pass resume=False to overwrite it") from None
         self._check_columns(table.column_names, self.out)
         return table.to_pylist()
 
     def append(self, rows: list[dict]):
+        if self.file is None:
+            self.open()
         self.writer.writerows(map(_text, rows))
         self.file.flush()
 
     def close(self, rows: list[dict]):
         """Write the file anew from ``rows``, one per point: a run retried after a failure was
         appended after its old row, and the file keeps only the new one."""
+        if self.file is None:
+            self.open()
         self.file.close()
-        if not self.parquet:
-            temporary = self.out.with_name(self.out.name + ".tmp")
+
+        def write_csv(temporary: Path) -> None:
             with open(temporary, "w", newline="") as file:
                 writer = csv.DictWriter(file, fieldnames=self.columns)
                 writer.writeheader()
                 writer.writerows(map(_text, rows))
-            os.replace(temporary, self.out)
-        if self.parquet:
+
+        def write_parquet(temporary: Path) -> None:
             pa = pyarrow_module()
-            table = pa.Table.from_pylist(rows, schema=_arrow_schema(pa, self.columns))
-            temporary = self.out.with_name(self.out.name + ".tmp")
-            pa.parquet.write_table(table, temporary)
-            os.replace(temporary, self.out)
+            pa.parquet.write_table(pa.Table.from_pylist(rows, schema=_arrow_schema(pa, self.columns)), temporary)
+
+        replace_atomically(self.out, write_parquet if self.parquet else write_csv)
+        if self.parquet:
             self.journal.unlink()
 
 

@@ -17,7 +17,7 @@ from shapefmu.fmi.native.compile import LAYER_HEADERS, LAYER_SOURCES, build_bina
 from shapefmu.fmi.native.model_part import ModelPart, check_name
 from shapefmu.fmi.native.nonlinear import NonlinearPlant
 from shapefmu.plants import as_plant
-from shapefmu.runtime.checks import check_size
+from shapefmu.runtime.checks import check_size, read_text_file
 
 # The hand-written C shipped with every plant FMU (package data in fmi/native/c/): the generic FMI
 # 2.0 layer and the plants' part of it.
@@ -37,8 +37,7 @@ def _check_states(count: int, what: str) -> None:
 def _from_model_file(path: Path, name: str | None) -> ModelPart:
     plant = as_plant(path)
     _check_states(plant.n_states, f"plant model {path}")
-    with open(path, "rb") as handle:
-        data = tomllib.load(handle)
+    data = tomllib.loads(read_text_file(path, "plant model"))  # as_plant read and checked it just now
     units = {signal: fields.get("unit", "") for key in ("inputs", "outputs") for signal, fields in data[key].items()}
     descriptions = {key: raw.get("description", "") for key, raw in data["parameters"].items()}
     return linear.model_part(plant, name=name, signal_units=units, descriptions=descriptions,
@@ -117,16 +116,22 @@ def model_from_file(path):
 
     path = find(path)
     if not path.is_file():
-        raise ValueError(f"model file {str(path)!r} does not exist")
+        raise ValueError(f"model file {str(path)!r} does not exist or is not a regular file")
     if path.suffix == ".toml":
         return path
     if path.suffix != ".py":
         raise ValueError(f"a plant model file must be .toml or .py (defining plant()), got {str(path)!r}")
     spec = importlib.util.spec_from_file_location(f"shapefmu_models_{path.stem}", path)
     module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    factory = getattr(module, "plant", None)
-    return factory() if callable(factory) else None
+    # The file is the user's program: whatever it raises, or a sys.exit in it, is their model's error.
+    try:
+        spec.loader.exec_module(module)
+        factory = getattr(module, "plant", None)
+        return factory() if callable(factory) else None
+    except SystemExit as stop:
+        raise ValueError(f"{path}: the model file called sys.exit({stop.code!r}) while shapefmu read it") from None
+    except Exception as error:  # noqa: BLE001 - reported as the model's, in one line
+        raise ValueError(f"{path}: the model file raised {type(error).__name__}: {error}") from None
 
 
 def build_all(models_dir=None, out_dir="fmus") -> list[Path]:

@@ -8,8 +8,10 @@ as ``$MINGW_CC`` or ``x86_64-w64-mingw32-gcc``), so that one ``.fmu`` serves Lin
 hosts. Where the cross compiler is absent the FMU is built for linux64 only and ``build_binaries``
 says so in the note it returns; its ``sources/`` let any Windows tool compile it later.
 
-Object files are cached in the temporary directory by the hash of the compiler, its flags and the
-sources, so the generic layer is compiled once per machine rather than once per FMU.
+Object files are cached by the hash of the compiler, its flags and the sources, so the generic layer
+is compiled once per user rather than once per FMU. An object in the cache is linked into FMUs that
+run when a host loads them, so the cache is a folder only this user can write (``object_cache``):
+one another local user created first, or opened to others, is never used.
 
 The DLL links libgcc statically and needs only the Windows C runtime (msvcrt.dll), which every
 Windows has.
@@ -17,10 +19,10 @@ Windows has.
 
 from __future__ import annotations
 
-import getpass
 import hashlib
 import os
 import shutil
+import stat
 import subprocess
 import tempfile
 import threading
@@ -74,13 +76,37 @@ def _run(command: list[str], compiler: str, what: str, platform: str) -> None:
         raise ValueError(f"compiling the {what} FMU for {platform} failed ({' '.join(command)}):\n{completed.stderr}")
 
 
-def _object(platform: Platform, sources: Path, c_file: str, headers: bytes, what: str) -> Path:
-    """The object file of ``c_file``, from a cache keyed by the compiler, its flags and the bytes of
-    the file and of every header beside it: the generic layer is compiled once, not per FMU."""
+def object_cache() -> Path | None:
+    """The folder of cached object files: ``$XDG_CACHE_HOME/shapefmu/objects`` (default
+    ``~/.cache``), else ``<tmp>/shapefmu-objects-<uid>``; the first that is a real folder (not a
+    link) owned by this process's uid that no one else may write, created with mode 0700 if absent.
+    None if neither is: objects are then compiled for each FMU. The uid, not ``$USER`` or the
+    password database, names the user, so a uid without a passwd entry builds too."""
+    candidates = []
+    home = os.environ.get("XDG_CACHE_HOME") or (os.path.join(os.environ["HOME"], ".cache") if os.environ.get("HOME") else None)
+    if home and os.path.isabs(home):
+        candidates.append(Path(home) / "shapefmu" / "objects")
+    candidates.append(Path(tempfile.gettempdir()) / f"shapefmu-objects-{os.getuid()}")
+    for folder in candidates:
+        try:
+            folder.parent.mkdir(mode=0o700, parents=True, exist_ok=True)
+            try:
+                folder.mkdir(mode=0o700)
+            except FileExistsError:
+                pass
+            status = os.lstat(folder)
+        except OSError:
+            continue
+        if stat.S_ISDIR(status.st_mode) and status.st_uid == os.getuid() and not status.st_mode & 0o022:
+            return folder
+    return None
+
+
+def _object(platform: Platform, sources: Path, c_file: str, headers: bytes, what: str, cache: Path) -> Path:
+    """The object file of ``c_file`` in ``cache``, keyed by the compiler, its flags and the bytes of the
+    file and of every header beside it: the generic layer is compiled once, not per FMU."""
     digest = hashlib.sha256(repr((platform.compiler, platform.flags)).encode() + headers)
     digest.update((sources / c_file).read_bytes())
-    cache = Path(tempfile.gettempdir()) / f"shapefmu-objects-{getpass.getuser()}"
-    cache.mkdir(exist_ok=True)
     target = cache / f"{digest.hexdigest()}.o"
     if not target.is_file():
         partial = cache / f"{digest.hexdigest()}.{os.getpid()}.{threading.get_ident()}.partial.o"
@@ -95,9 +121,11 @@ def compile_binary(platform: Platform, sources: Path, c_files, binary: Path, wha
     """Compile ``c_files`` (in ``sources``) into the shared library ``binary``."""
     binary.parent.mkdir(parents=True, exist_ok=True)
     headers = b"".join(path.name.encode() + path.read_bytes() for path in sorted(sources.glob("*.h")))
-    objects = [str(_object(platform, sources, f, headers, what)) for f in c_files]
-    _run([platform.compiler, *platform.flags, *objects, "-o", str(binary), "-lm"], platform.compiler, what,
-         platform.name)
+    with tempfile.TemporaryDirectory(prefix="shapefmu-objects-") as scratch:  # where no cache may be used
+        cache = object_cache() or Path(scratch)
+        objects = [str(_object(platform, sources, f, headers, what, cache)) for f in c_files]
+        _run([platform.compiler, *platform.flags, *objects, "-o", str(binary), "-lm"], platform.compiler, what,
+             platform.name)
 
 
 # binaries/ folder names per FMI version: FMI 2.0 names platforms, FMI 3.0 architecture-os tuples.

@@ -178,8 +178,11 @@ static fmi2Status step_rk4(Fmi2Instance *inst, double t, double h, const char *f
     Plant *plant = plant_of(inst);
     const int n = nx();
     const double substep = p_of(inst)[plant_model.substep_parameter];
-    const double count = ceil(h / substep * (1.0 - 1e-12));
-    const long substeps = count < 1.0 ? 1 : (long)count;
+    const long substeps = plant_substeps(h, substep);
+    if (substeps == 0)
+        return fmi2_fail(inst, "%s: a step of %g s in RK4 substeps of at most substep = %g s needs more than the "
+                         "%ld substeps allowed per step; take shorter steps or a longer substep", function, h, substep,
+                         PLANT_MAX_SUBSTEPS);
     const double dt = h / (double)substeps;
     double *x = x_of(inst);
     for (long s = 0; s < substeps; s++) {

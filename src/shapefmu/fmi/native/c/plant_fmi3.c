@@ -121,8 +121,11 @@ static int rates(Plant *p, const double *x, double *dx) {
 
 static fmi3Status rk4_step(Plant *p, double h, const char *function) {
     const int n = NX;
-    const double count = ceil(h / P(p)[plant_model.substep_parameter] * (1.0 - 1e-12));
-    const long substeps = count < 1.0 ? 1 : (long)count;
+    const double substep = P(p)[plant_model.substep_parameter];
+    const long substeps = plant_substeps(h, substep);
+    if (substeps == 0)
+        return fail(p, "%s: a step of %g s in RK4 substeps of at most substep = %g s needs more than the %ld substeps "
+                    "allowed per step; take shorter steps or a longer substep", function, h, substep, PLANT_MAX_SUBSTEPS);
     const double dt = h / (double)substeps;
     double *x = X(p);
     for (long s = 0; s < substeps; s++) {

@@ -22,6 +22,7 @@
 #ifndef PLANT_MODEL_H
 #define PLANT_MODEL_H
 
+#include <math.h>
 #include <stddef.h>
 
 typedef enum {
@@ -63,5 +64,16 @@ int plant_derivatives_outputs(const double *x, const double *u, const double *p,
 /* A (nx*nx), B (nx*nu), C (ny*nx), D (ny*nu), column-major, at (x, u, p); returns 0 on success. */
 int plant_jacobians(const double *x, const double *u, const double *p,
                     double *A, double *B, double *C, double *D, double *work);
+
+/* RK4 substeps of one Co-Simulation step of a nonlinear plant: h split into equal substeps no longer
+ * than `substep`, at least one; 0 when that would be more than PLANT_MAX_SUBSTEPS (or h / substep is
+ * not finite): a step of 1e300 s, or a substep of 1e-300 s, is refused rather than left unintegrated
+ * by an overflowing count. runtime/limits.py, MAX_RK4_SUBSTEPS, says why this number. */
+#define PLANT_MAX_SUBSTEPS 10000000L
+static inline long plant_substeps(double h, double substep) {
+    const double count = h / substep * (1.0 - 1e-12);
+    if (!(count <= (double)PLANT_MAX_SUBSTEPS)) return 0;  /* also NaN and inf */
+    return count <= 1.0 ? 1 : (long)ceil(count);
+}
 
 #endif
