@@ -184,3 +184,32 @@ def test_a_resumed_row_with_a_field_of_megabytes_is_one_line(plant_ssp, workdir)
     (workdir / "rows.csv").write_text("\n".join([lines[0], lines[1].replace(",ok,", ",ok," + "x" * 5_000_000, 1)]) + "\n")
     code, _, err = guarded(["sweep", str(plant_ssp), "--out", "rows.csv", *SWEEP], seconds=60)
     assert code == 2 and len(err.splitlines()) == 1 and "rows.csv, line 2: not a sweep row" in err
+
+
+def test_a_server_that_is_no_dask_scheduler_is_one_line(plant_ssp, workdir):
+    import socket
+    import threading
+
+    server = socket.socket()
+    server.bind(("127.0.0.1", 0))
+    server.listen()
+
+    def answer_as_a_web_server():
+        while True:
+            try:
+                connection, _ = server.accept()
+            except OSError:  # closed at the end of the test
+                return
+            connection.sendall(b"HTTP/1.0 400 Bad Request\r\n\r\nnot a scheduler")
+            connection.close()
+
+    threading.Thread(target=answer_as_a_web_server, daemon=True).start()
+    address = f"tcp://127.0.0.1:{server.getsockname()[1]}"
+    arguments = [a for a in SWEEP if a not in ("--workers", "1")]
+    try:
+        code, _, err = guarded(["sweep", str(plant_ssp), "--out", "rows.csv", "--scheduler", address, *arguments],
+                               seconds=120)
+    finally:
+        server.close()
+    assert code == 2 and err.count("\n") == 1 and f"scheduler {address!r}: no Dask scheduler answered" in err
+    assert not (workdir / "rows.csv").exists()

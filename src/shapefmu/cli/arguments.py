@@ -80,12 +80,12 @@ def output_folder(text: str) -> str:
 def _check_writable(path: Path, text: str) -> None:
     from shapefmu.cosim.output_files import check_output
 
+    if os.path.isdir(path) and not os.path.islink(path):  # os.path: False, not OSError, on too long a name
+        raise argparse.ArgumentTypeError(f"{text!r} is a folder; give a file name")
     try:  # a link, a FIFO or a device, a name the file system cannot hold
         check_output(path, "file")
     except ValueError as error:
         raise argparse.ArgumentTypeError(str(error)) from None
-    if path.is_dir():
-        raise argparse.ArgumentTypeError(f"{text!r} is a folder; give a file name")
     folder = path.parent
     while not folder.exists() and folder != folder.parent:
         folder = folder.parent

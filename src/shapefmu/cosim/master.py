@@ -131,6 +131,8 @@ class Master:
         for name in model_exchange or ():
             if name not in self.system.components:
                 raise ValueError(f"model_exchange names unknown component {name!r} (components: {', '.join(names)})")
+        check_size(len(names), "MAX_COMPONENTS", f"system {self.system.name!r} has", "components",
+                   "split it into systems run one after the other")
         self.units, self._folders = load_units([(n, self.system.components[n].fmu) for n in names], set(model_exchange or ()))
         # Released by close(), or when the master is collected or the interpreter exits without
         # close(): weakref.finalize runs from an atexit hook while modules can still be used,

@@ -30,7 +30,6 @@ import ctypes
 import hashlib
 import os
 import shutil
-import subprocess
 import tempfile
 from ctypes import POINTER, c_double, c_long, c_void_p
 from dataclasses import dataclass
@@ -39,6 +38,8 @@ from pathlib import Path
 import numpy as np
 
 from shapefmu.cosim.units import ModelExchangeUnit
+from shapefmu.fmi.compiler import run_compiler
+
 
 @dataclass(frozen=True)
 class Guard:
@@ -221,8 +222,16 @@ _RECORD_C = {"f8": "double", "f4": "float", "i1": "signed char", "u1": "unsigned
              "?": "unsigned char"}
 
 
+# gcc's time on the one generated function grows faster than its length (600 components: 8.6 s at
+# -O2, where 128 take well under a second): a larger system runs the Python loop, which starts at once.
+MAX_COMPILED_COMPONENTS = 128
+
+
 def python_only_reason(master, blocks) -> str | None:
     """Why the plan cannot run as a compiled C loop, or None if it can."""
+    if len(master.units) > MAX_COMPILED_COMPONENTS:
+        return (f"the system has {len(master.units)} components, more than the {MAX_COMPILED_COMPONENTS} whose "
+                f"step loop compiles in about a second")
     for _, body in blocks:
         for op in body:
             if op[0] == "me":
@@ -416,7 +425,7 @@ def _compile(compiler: str, source: str):
             c_file.write_text(source)
             # -ffp-contract=off: no fused multiply-add, so x * f + o rounds as Python rounds it.
             command = [compiler, "-O2", "-shared", "-fPIC", "-ffp-contract=off", "-o", str(library), str(c_file), "-lm"]
-            if subprocess.run(command, capture_output=True).returncode != 0:
+            if run_compiler(command).returncode != 0:
                 return None
             _COMPILED[key] = ctypes.CDLL(str(library))
     return _COMPILED[key]

@@ -97,6 +97,27 @@ class Connection:
         return f"{self.end_component}.{self.end_connector}"
 
 
+def check_component_name(name, what: str) -> str:
+    """A component name: it heads the component's columns of every results file and names it in
+    messages, so it is one line of printable text, without a '.' (which separates it from a variable)."""
+    if not isinstance(name, str) or not name or "." in name or name != name.strip() or not name.isprintable():
+        raise ValueError(f"{what} must be non-empty printable text without '.', line breaks or surrounding "
+                         f"spaces, got {name!r}")
+    return name
+
+
+def _finite(value, what: str) -> float:
+    """A finite float (a connection's factor or offset, an experiment's time), or a ValueError naming it:
+    a NaN or 1e400 would run every step with it."""
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{what} must be a finite number, got {value!r}") from None
+    if not math.isfinite(number):
+        raise ValueError(f"{what} must be a finite number, got {value!r}")
+    return number
+
+
 def _split(reference: str, what: str) -> tuple[str, str]:
     component, dot, variable = reference.partition(".")
     if not dot or not component or not variable:
@@ -140,8 +161,7 @@ class System:
         ``parameters`` become an inline parameter binding; ``ssv`` (a path) a binding to an .ssv
         file whose values are applied first (inline values override them, as SSP orders bindings).
         """
-        if not name or "." in name:
-            raise ValueError(f"component name must be non-empty and contain no '.', got {name!r}")
+        check_component_name(name, "component name")
         if name in self.components:
             raise ValueError(f"component {name!r} is already in system {self.name!r}")
         fmu = Path(fmu_path)
@@ -161,7 +181,9 @@ class System:
         """Connect output ``start`` ("comp.y") to input ``end`` ("comp.u"): end = factor*start + offset."""
         start_component, start_connector = _split(start, "connection start")
         end_component, end_connector = _split(end, "connection end")
-        connection = Connection(start_component, start_connector, end_component, end_connector, float(factor), float(offset))
+        factor, offset = (_finite(value, f"connection {start} -> {end}: {what}") for value, what in
+                          ((factor, "factor"), (offset, "offset")))
+        connection = Connection(start_component, start_connector, end_component, end_connector, factor, offset)
         self._check_connection(connection, f"connection {start} -> {end}")
         self.connections.append(connection)
         return self
@@ -468,12 +490,18 @@ def _read_ssd(ssd: Path, origin: str, fmu_folder=None) -> System:
     system.origin = origin
     base = ssd.parent
     elements = _child(node, "Elements")
+    for item in elements if elements is not None else []:
+        if _local(item.tag) != "Component":  # a nested ssd:System, an ssd:SignalDictionaryReference
+            raise ValueError(f"{origin}: {_local(item.tag)} {item.get('name')!r} in the Elements of system "
+                             f"{system.name!r} is a nested element, which shapefmu does not run; flatten the "
+                             f"system into components and connections")
     for item in _children(elements, "Component") if elements is not None else []:
         name = item.get("name")
         source = item.get("source")
         where = f"{origin}: Component {name!r}"
         if not name or not source:
             raise ValueError(f"{where}: needs both a name and a source")
+        check_component_name(name, f"{where}: its name")
         if name in system.components:
             raise ValueError(f"{where}: a component of that name already exists")
         fmu = (base / source if fmu_folder is None else Path(fmu_folder) / Path(source).name).resolve()
@@ -512,8 +540,8 @@ def _read_ssd(ssd: Path, origin: str, fmu_folder=None) -> System:
         factor, offset = 1.0, 0.0
         transformation = _child(item, "LinearTransformation")
         if transformation is not None:
-            factor = float(transformation.get("factor", 1.0))
-            offset = float(transformation.get("offset", 0.0))
+            factor = _finite(transformation.get("factor", 1.0), f"{where}: LinearTransformation factor")
+            offset = _finite(transformation.get("offset", 0.0), f"{where}: LinearTransformation offset")
         for other in item:
             if _local(other.tag) in ("MapTransformation", "BooleanMappingTransformation", "IntegerMappingTransformation"):
                 raise ValueError(f"{where}: {_local(other.tag)} is not supported (only LinearTransformation)")
@@ -523,9 +551,9 @@ def _read_ssd(ssd: Path, origin: str, fmu_folder=None) -> System:
         system.connections.append(connection)
     experiment = _child(root, "DefaultExperiment")
     if experiment is not None:
-        system.start_time = float(experiment.get("startTime", 0.0))
+        system.start_time = _finite(experiment.get("startTime", 0.0), f"{origin}: DefaultExperiment startTime")
         if experiment.get("stopTime") is not None:
-            system.stop_time = float(experiment.get("stopTime"))
+            system.stop_time = _finite(experiment.get("stopTime"), f"{origin}: DefaultExperiment stopTime")
         system.experiment_annotations = [copy.deepcopy(a) for a in experiment if _local(a.tag) == "Annotations"]
     system.annotations = [copy.deepcopy(a) for a in root if _local(a.tag) == "Annotations"]
     system.system_annotations = [copy.deepcopy(a) for a in node if _local(a.tag) == "Annotations"]

@@ -101,8 +101,8 @@ def read_text_file(path, what):
     import stat
 
     name = os.fspath(path)
-    try:
-        with open(name, "rb") as stream:
+    try:  # opened without blocking: a FIFO with no writer would wait in open() forever
+        with open(os.open(name, os.O_RDONLY | os.O_NONBLOCK), "rb") as stream:
             status = os.fstat(stream.fileno())
             if not stat.S_ISREG(status.st_mode):
                 raise ValueError(f"{name}: {what} must be a regular file, not a FIFO, device or folder")

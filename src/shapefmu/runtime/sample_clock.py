@@ -29,15 +29,30 @@ update), and reads the current sample's input through ``current(u)``.
 
 import math
 
-from .limits import MAX_SAMPLES_PER_STEP, SAMPLE_TOLERANCE
+from .limits import MAX_SAMPLES_PER_STEP, PYTHON_STEP_SECONDS, SAMPLE_TOLERANCE
+
+
+# What one sample of each Python kernel costs, measured (limits.py, PYTHON_STEP_SECONDS), rounded up:
+# the streaming filter (fixed, per nonzero tap or impulse), the STOS law (fixed, per impulse), the EKF tuner.
+FIR_SAMPLE_SECONDS = (0.1e-6, 0.04e-6)
+STOS_SAMPLE_SECONDS = (0.5e-6, 0.3e-6)
+EKF_SAMPLE_SECONDS = 25e-6
+
+
+def samples_per_python_step(seconds_per_sample):
+    """The samples a Python FMU may take in one step whose per-sample work costs about
+    ``seconds_per_sample``: as many as fit in PYTHON_STEP_SECONDS, at least 1, at most MAX_SAMPLES_PER_STEP."""
+    return max(1, min(MAX_SAMPLES_PER_STEP, int(PYTHON_STEP_SECONDS / seconds_per_sample)))
 
 
 class SampleClock:
-    """Sample index and latch of one sampled FMU with period ``ts`` from start time ``t0``."""
+    """Sample index and latch of one sampled FMU with period ``ts`` from start time ``t0``; a step may
+    span at most ``max_samples`` samples (a Python FMU's bound: ``samples_per_python_step``)."""
 
-    def __init__(self, ts, t0):
+    def __init__(self, ts, t0, max_samples=MAX_SAMPLES_PER_STEP):
         self.ts = ts
         self.t0 = t0
+        self.max_samples = max_samples
         self.k = 0
         self.latched = False
         self.v = None
@@ -66,16 +81,16 @@ class SampleClock:
         """Take the step (t, t + h] with input value ``u``: ``commit(value)`` once per sample instant.
 
         Returns the current sample's input value afterwards (``current(u)``). Raises ValueError,
-        with the clock untouched, for a step spanning more than MAX_SAMPLES_PER_STEP samples.
+        with the clock untouched, for a step spanning more than ``max_samples`` samples.
         """
         end = t + h
         # Checked on the quotient first: K of h = 1e300 would be an integer with 300 digits.
         ahead = (end - self.t0) / self.ts - self.k
-        if not ahead <= MAX_SAMPLES_PER_STEP + 1.0:  # also catches inf and nan
+        if not ahead <= self.max_samples + 1.0:  # also catches inf and nan
             raise ValueError(self._too_long(h, ahead))
         k_end = self.index(end)
         count = k_end - self.k
-        if count > MAX_SAMPLES_PER_STEP:
+        if count > self.max_samples:
             raise ValueError(self._too_long(h, count))
         if count > 0:
             commit(self.v if self.latched else u)
@@ -87,7 +102,9 @@ class SampleClock:
         return self.v if self.latched else u
 
     def _too_long(self, h, samples):
+        why = ("about a second of this FMU's work (shapefmu.runtime.limits.PYTHON_STEP_SECONDS)"
+               if self.max_samples < MAX_SAMPLES_PER_STEP else "shapefmu.runtime.limits.MAX_SAMPLES_PER_STEP")
         return (
             f"communication step h = {h!r} s spans {samples:.6g} samples of Ts = {self.ts!r} s; "
-            f"at most {MAX_SAMPLES_PER_STEP} per step"
+            f"at most {self.max_samples} per step ({why}): take shorter communication steps"
         )

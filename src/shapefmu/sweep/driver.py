@@ -121,11 +121,12 @@ def _open_client(client, n_workers):
         raise ValueError(f"n_workers applies to the default local cluster only, got n_workers={n_workers} with "
                          f"client={client!r}")
     if isinstance(client, str):
-        try:  # a wrong address, or a server that is no Dask scheduler, times out here
+        try:  # a wrong address times out; a server that is no Dask scheduler fails the handshake in
+            # whatever way its bytes make Dask's protocol fail (a MemoryError for an HTTP server)
             return Client(client, timeout=SCHEDULER_TIMEOUT), None, True
-        except (OSError, TimeoutError) as error:
+        except Exception as error:  # noqa: BLE001 -- any failure here means: no scheduler at that address
             raise ValueError(f"scheduler {client!r}: no Dask scheduler answered within {SCHEDULER_TIMEOUT} s "
-                             f"({type(error).__name__}: {error})") from None
+                             f"({type(error).__name__}: {str(error)[:200]})") from None
     if isinstance(client, Client):
         return client, None, False
     raise ValueError(f"client must be None, a scheduler address such as 'tcp://host:8786' or a distributed.Client, "

@@ -45,7 +45,8 @@ def _from_model_file(path: Path, name: str | None) -> ModelPart:
 
 
 def to_model_part(model, name: str | None = None) -> ModelPart:
-    """The model part of a model file path, a ``Plant``, a python-control LTI or a ``NonlinearPlant``."""
+    """The model part of a model file path (or the name of a shipped model), a ``Plant``, a
+    python-control LTI or a ``NonlinearPlant``."""
     if name is not None:
         check_name(name, "name")
     if isinstance(model, NonlinearPlant):
@@ -55,7 +56,9 @@ def to_model_part(model, name: str | None = None) -> ModelPart:
             part = dataclasses.replace(part, name=name)
         return part
     if isinstance(model, (str, os.PathLike)):
-        return _from_model_file(Path(model), name)
+        from shapefmu.plants.shipped import find
+
+        return _from_model_file(find(model, (".toml",)), name)
     plant = as_plant(model)
     _check_states(plant.n_states, f"plant {plant.name!r}")
     return linear.model_part(plant, name=name)

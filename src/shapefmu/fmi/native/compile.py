@@ -23,13 +23,14 @@ import hashlib
 import os
 import shutil
 import stat
-import subprocess
 import tempfile
 import threading
 import zipfile
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
+
+from shapefmu.fmi.compiler import run_compiler
 
 # The generic FMI 2.0 layer and the FMI headers, shipped in every native FMU.
 LAYER_SOURCES = ("fmi2_layer.c", "fmi2_layer_state.c", "fmi2_layer_me.c", "fmu_liveness.c")
@@ -69,7 +70,7 @@ def copy_c_files(sources: Path, names) -> None:
 
 def _run(command: list[str], compiler: str, what: str, platform: str) -> None:
     try:
-        completed = subprocess.run(command, capture_output=True, text=True)
+        completed = run_compiler(command)
     except FileNotFoundError:
         raise ValueError(f"C compiler {compiler!r} not found: set CC or install gcc") from None
     if completed.returncode != 0:

@@ -27,7 +27,6 @@ import importlib.util
 import json
 import os
 import shutil
-import subprocess
 import sys
 import sysconfig
 import tempfile
@@ -36,6 +35,7 @@ import zipfile
 from pathlib import Path
 
 from shapefmu import __version__
+from shapefmu.fmi.compiler import run_compiler
 from shapefmu.fmi.python.model_description import model_description
 from shapefmu.fmi.python.slaves import SLAVES
 
@@ -154,7 +154,7 @@ def compile_shim(out: Path, model_identifier: str, guid: str, libpython: str | N
         f"-DSHIM_FALLBACK_MINORS={','.join(map(str, minors))}",
         "-I", str(FMI_HEADERS_DIR), "-o", str(out), *map(str, SHIM_SOURCES), "-ldl", "-lpthread",
     ]
-    result = subprocess.run(command, capture_output=True, text=True)
+    result = run_compiler(command)
     if result.returncode != 0:
         raise RuntimeError(f"compiling the FMU front end failed:\n{' '.join(command)}\n{result.stderr}")
     return out

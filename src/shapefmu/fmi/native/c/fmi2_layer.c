@@ -15,6 +15,7 @@
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "fmi2_layer.h"
@@ -74,11 +75,11 @@ char *fmi2_string(Fmi2Instance *inst, size_t vr) {
 
 /* ---------------------------------------------------------------- life cycle */
 
-static void free_instance(Fmi2Instance *inst) {
+/* Everything an instance holds but its struct (malloc'ed by the layer, released or retired apart). */
+static void free_buffers(Fmi2Instance *inst) {
     model_free(inst);
     void *buffers[] = {inst->name, inst->reals, inst->integers, inst->booleans, inst->strings};
     for (size_t i = 0; i < sizeof buffers / sizeof buffers[0]; i++) fmi2_release(inst, buffers[i]);
-    inst->callbacks.freeMemory(inst);
 }
 
 static void log_instantiation_error(const fmi2CallbackFunctions *callbacks, fmi2String name, const char *message) {
@@ -112,9 +113,10 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
                                 : "fmuType must be fmi2CoSimulation (this FMU declares no Model Exchange)");
         return NULL;
     }
-    Fmi2Instance *inst = functions->allocateMemory(1, sizeof(Fmi2Instance));
+    /* The struct from malloc, not the host's allocator: it may be released after the host is gone
+     * (fmu_retire), and its address must not come back soon as another instance's. */
+    Fmi2Instance *inst = calloc(1, sizeof(Fmi2Instance));
     if (inst == NULL) return NULL;
-    memset(inst, 0, sizeof *inst);
     inst->info = info;
     inst->callbacks = *functions;
     inst->type = fmuType;
@@ -128,7 +130,8 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     if (inst->name == NULL || (info.n_real && !inst->reals) || (info.n_integer && !inst->integers)
         || (info.n_boolean && !inst->booleans) || (info.n_string && !inst->strings) || model_instantiate(inst) != 0) {
         log_instantiation_error(functions, instanceName, "out of memory");
-        free_instance(inst);
+        free_buffers(inst);
+        free(inst);
         return NULL;
     }
     strcpy(inst->name, instanceName);
@@ -140,7 +143,9 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
 
 void fmi2FreeInstance(fmi2Component c) {
     /* An instance freed already (or never made here) is not touched: see fmu_liveness.h. */
-    if (fmu_mark_freed(c)) free_instance((Fmi2Instance *)c);
+    if (!fmu_mark_freed(c)) return;
+    free_buffers((Fmi2Instance *)c);
+    fmu_retire(c);
 }
 
 const char *fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }

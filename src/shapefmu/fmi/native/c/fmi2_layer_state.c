@@ -1,17 +1,23 @@
 /* FMU states of the generic FMI 2.0 layer: get, set, free, serialise and deserialise.
  *
  * A state is everything needed to resume exactly: the mode, the time, every variable's value and
- * the model part's own data (model_save_state: a filter's delay line, its sample clock). The
- * serialised form starts with a header that identifies this FMU's layout, so bytes of another FMU
- * or a truncated copy are refused with a logged error.
+ * the model part's own data (model_save_state: a filter's delay line, its sample clock). A state
+ * carries the identity of the FMU that made it (a hash of its GUID, which names its build and design,
+ * and its variable counts), in memory and in its serialised header: a state of another FMU, bytes
+ * that are no state, or a truncated copy are refused with a logged error. The values a state would
+ * restore pass the same checks as values set one by one (model_check_*), so a forged state cannot
+ * bring in what fmi2SetReal would refuse (a NaN impulse time, a negative period).
  */
+#include <math.h>
 #include <string.h>
 
 #include "fmi2_layer.h"
 
-#define SERIAL_MAGIC 0x73686170464d5532ULL /* "shapFMU2" */
+#define SERIAL_MAGIC 0x73686170464d5532ULL   /* "shapFMU2" */
+#define SNAPSHOT_MAGIC 0x7368617053746174ULL /* "shapStat" */
 
 typedef struct {
+    unsigned long long magic, identity;
     Fmi2Mode mode;
     double time, start_time;
     double *reals;
@@ -22,6 +28,38 @@ typedef struct {
 } Snapshot;
 
 static size_t string_bytes(const Fmi2Instance *inst) { return inst->info.n_string * (FMI2_STRING_CAPACITY + 1); }
+
+/* FNV-1a of this FMU's GUID and variable counts: the same for every instance of one FMU build. */
+static unsigned long long identity(const Fmi2Instance *inst) {
+    const Fmi2ModelInfo *info = &inst->info;
+    unsigned long long hash = 14695981039346656037ULL;
+    for (const unsigned char *c = (const unsigned char *)info->guid; *c != '\0'; c++) hash = (hash ^ *c) * 1099511628211ULL;
+    const size_t counts[4] = {info->n_real, info->n_integer, info->n_boolean, info->n_string};
+    for (int i = 0; i < 4; i++) hash = (hash ^ (unsigned long long)counts[i]) * 1099511628211ULL;
+    return hash;
+}
+
+/* Whether every value of s passes the model's checks of a set call (see the file comment). */
+static fmi2Status check_values(Fmi2Instance *inst, const Snapshot *s) {
+    const Fmi2ModelInfo *info = &inst->info;
+    const char *name;
+    if (!isfinite(s->time) || !isfinite(s->start_time))
+        return fmi2_fail(inst, "fmi2SetFMUstate: the state's time is not finite");
+    for (size_t vr = 0; vr < info->n_real; vr++)
+        if (model_variable(inst, FMI2_REAL, vr, &name) != FMI2_NO_VARIABLE
+            && model_check_real(inst, vr, s->reals[vr], "fmi2SetFMUstate") != fmi2OK)
+            return fmi2Error;
+    /* Value references run on across the types (fmi2_layer.c, type_range): Integer ones after the Reals. */
+    for (size_t i = 0, vr = info->n_real; i < info->n_integer; i++, vr++)
+        if (model_variable(inst, FMI2_INTEGER, vr, &name) != FMI2_NO_VARIABLE
+            && model_check_integer(inst, vr, s->integers[i], "fmi2SetFMUstate") != fmi2OK)
+            return fmi2Error;
+    for (size_t i = 0, vr = info->n_real + info->n_integer + info->n_boolean; i < info->n_string; i++, vr++)
+        if (model_variable(inst, FMI2_STRING, vr, &name) != FMI2_NO_VARIABLE
+            && model_check_string(inst, vr, s->strings + i * (FMI2_STRING_CAPACITY + 1), "fmi2SetFMUstate") != fmi2OK)
+            return fmi2Error;
+    return fmi2OK;
+}
 
 static void free_snapshot(Fmi2Instance *inst, Snapshot *s) {
     void *buffers[] = {s->reals, s->integers, s->booleans, s->strings, s->model};
@@ -34,6 +72,8 @@ static Snapshot *new_snapshot(Fmi2Instance *inst, size_t model_size) {
     Snapshot *s = fmi2_allocate(inst, 1, sizeof(Snapshot));
     if (s == NULL) return NULL;
     memset(s, 0, sizeof *s);
+    s->magic = SNAPSHOT_MAGIC;
+    s->identity = identity(inst);
     const Fmi2ModelInfo *info = &inst->info;
     s->reals = fmi2_allocate(inst, info->n_real, sizeof(double));
     s->integers = fmi2_allocate(inst, info->n_integer, sizeof(int));
@@ -87,6 +127,9 @@ fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate) {
     REQUIRE(c, ANY_MODE, "fmi2SetFMUstate");
     if (FMUstate == NULL) return fmi2_fail(inst, "fmi2SetFMUstate: FMUstate is NULL");
     const Snapshot *s = FMUstate;
+    if (s->magic != SNAPSHOT_MAGIC || s->identity != identity(inst))
+        return fmi2_fail(inst, "fmi2SetFMUstate: the state is not one of this FMU (another FMU's, or no state at all)");
+    if (check_values(inst, s) != fmi2OK) return fmi2Error;
     copy_values(inst, inst->reals, inst->integers, inst->booleans, inst->strings, s->reals, s->integers, s->booleans,
                 s->strings);
     inst->time = s->time;
@@ -100,14 +143,17 @@ fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate) {
 fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
     REQUIRE(c, ANY_MODE, "fmi2FreeFMUstate");
     if (FMUstate == NULL || *FMUstate == NULL) return fmi2OK;
+    const Snapshot *s = *FMUstate;
+    if (s->magic != SNAPSHOT_MAGIC || s->identity != identity(inst))
+        return fmi2_fail(inst, "fmi2FreeFMUstate: the state is not one of this FMU (another FMU's, or no state at all)");
     free_snapshot(inst, *FMUstate);
     *FMUstate = NULL;
     return fmi2OK;
 }
 
-/* Serialised layout: a header of 7 uint64 (magic, the four counts, mode, model bytes), the time and
- * the start time, then the Real, Integer, Boolean and String values and the model bytes. */
-enum { HEADER_WORDS = 7 };
+/* Serialised layout: a header of 8 uint64 (magic, identity, the four counts, mode, model bytes), the
+ * time and the start time, then the Real, Integer, Boolean and String values and the model bytes. */
+enum { HEADER_WORDS = 8 };
 
 static size_t serial_size(const Fmi2Instance *inst, size_t model_size) {
     const Fmi2ModelInfo *info = &inst->info;
@@ -141,8 +187,9 @@ fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byt
         return fmi2_fail(inst, "fmi2SerializeFMUstate: buffer holds %zu bytes, the state needs %zu", size,
                          serial_size(inst, s->model_size));
     const Fmi2ModelInfo *info = &inst->info;
-    const unsigned long long header[HEADER_WORDS] = {SERIAL_MAGIC, info->n_real, info->n_integer, info->n_boolean,
-                                                     info->n_string, (unsigned long long)s->mode, s->model_size};
+    const unsigned long long header[HEADER_WORDS] = {SERIAL_MAGIC, identity(inst), info->n_real, info->n_integer,
+                                                     info->n_boolean, info->n_string, (unsigned long long)s->mode,
+                                                     s->model_size};
     const double times[2] = {s->time, s->start_time};
     unsigned char *p = put((unsigned char *)serializedState, header, sizeof header);
     p = put(p, times, sizeof times);
@@ -163,18 +210,19 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedSta
         return fmi2_fail(inst, "fmi2DeSerializeFMUstate: got %zu bytes, fewer than a state's header", size);
     const unsigned char *p = take(header, (const unsigned char *)serializedState, sizeof header);
     const Fmi2ModelInfo *info = &inst->info;
-    const int mode_ok = header[5] != 0 && (header[5] & ~(unsigned long long)ANY_MODE) == 0;
-    if (header[0] != SERIAL_MAGIC || header[1] != info->n_real || header[2] != info->n_integer
-        || header[3] != info->n_boolean || header[4] != info->n_string || !mode_ok || header[6] > size)
+    const int mode_ok = header[6] != 0 && (header[6] & ~(unsigned long long)ANY_MODE) == 0;
+    if (header[0] != SERIAL_MAGIC || header[1] != identity(inst) || header[2] != info->n_real
+        || header[3] != info->n_integer || header[4] != info->n_boolean || header[5] != info->n_string || !mode_ok
+        || header[7] > size)
         return fmi2_fail(inst, "fmi2DeSerializeFMUstate: the bytes are not a serialised state of this FMU");
-    const size_t model_size = (size_t)header[6];
+    const size_t model_size = (size_t)header[7];
     if (size != serial_size(inst, model_size))
         return fmi2_fail(inst, "fmi2DeSerializeFMUstate: got %zu bytes, a state of this FMU has %zu", size,
                          serial_size(inst, model_size));
     Snapshot *s = writable(inst, FMUstate, model_size);
     if (s == NULL) return fmi2_fail(inst, "fmi2DeSerializeFMUstate: out of memory");
     double times[2];
-    s->mode = (Fmi2Mode)header[5];
+    s->mode = (Fmi2Mode)header[6];
     p = take(times, p, sizeof times);
     s->time = times[0];
     s->start_time = times[1];

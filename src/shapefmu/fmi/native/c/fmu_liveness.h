@@ -9,6 +9,12 @@
  * The tag lives in the instance, not in a table of this library: ecos loads one copy of an FMU's
  * library per instance and calls an instance through another copy's functions, so a per-library
  * table would refuse live instances there.
+ *
+ * A freed instance's struct is not released at once but retired (fmu_retire): kept, with its dead
+ * tag, while the next FMU_RETIRED instances of this library are freed. The allocator therefore cannot
+ * give its address to a new instance soon after, and a call through the stale handle still finds the
+ * dead tag rather than a stranger's live one (a host that frees, instantiates again, then calls the
+ * old handle). The structs still retired when the library is unloaded are released then.
  */
 #ifndef FMU_LIVENESS_H
 #define FMU_LIVENESS_H
@@ -23,5 +29,10 @@ int fmu_mark_freed(const void *instance);
 /* 1 if instance is live; else 0, after one line on stderr naming function (the instance's logger
  * may be gone with it). */
 int fmu_is_live(const void *instance, const char *function);
+
+/* Hand a freed instance's struct (marked freed, allocated with malloc) to the retired ring, which
+ * releases it with free() FMU_RETIRED frees later; thread-safe. */
+#define FMU_RETIRED 256
+void fmu_retire(void *instance);
 
 #endif

@@ -24,7 +24,11 @@
 #include "plant_fmi3.h"
 #include "plant_model.h"
 
-typedef struct { Mode mode; double *v; } Snapshot;
+/* An FMU state: the mode and the values, marked by this FMU's instantiation token (a state of another
+ * FMU, or a pointer that is no state, is refused rather than copied from). */
+#define SNAPSHOT_MAGIC 0x7368617053746174ULL /* "shapStat" */
+typedef struct { unsigned long long magic; const char *token; Mode mode; double *v; } Snapshot;
+static int ours(const Snapshot *s) { return s->magic == SNAPSHOT_MAGIC && s->token == plant_model.guid; }
 
 #define NX plant_model.n_states
 #define NU plant_model.n_inputs
@@ -165,11 +169,11 @@ static void start_values(Plant *p) {
 
 /* ------------------------------------------------------------------ life cycle */
 
-static void free_plant(Plant *p) {
+/* Everything a plant holds but its struct (released on a failed instantiation, retired on free). */
+static void free_buffers(Plant *p) {
     void *buffers[] = {p->name, p->v, p->A, p->B, p->C, p->D, p->work, p->augmented, p->exponential, p->Phi, p->Gamma,
                        p->expm_work, p->next, p->k1, p->k2, p->k3, p->k4, p->stage, p->expm_iwork};
     for (size_t i = 0; i < sizeof buffers / sizeof buffers[0]; i++) free(buffers[i]);
-    free(p);
 }
 
 static fmi3Instance instantiate(fmi3String name, fmi3String token, int model_exchange, fmi3Boolean logging_on,
@@ -213,7 +217,7 @@ static fmi3Instance instantiate(fmi3String name, fmi3String token, int model_exc
     if (!(p->name && p->v && p->A && p->B && p->C && p->D && p->work && p->augmented && p->exponential && p->Phi
           && p->Gamma && p->expm_work && p->expm_iwork && p->next && p->k1 && p->k2 && p->k3 && p->k4 && p->stage)) {
         if (log != NULL) log(environment, fmi3Error, "logStatusError", "out of memory");
-        free_plant(p);
+        free_buffers(p), free(p);
         return NULL;
     }
     strcpy(p->name, name);
@@ -253,7 +257,7 @@ fmi3Instance fmi3InstantiateScheduledExecution(fmi3String instanceName, fmi3Stri
 
 void fmi3FreeInstance(fmi3Instance instance) {
     /* An instance freed already (or never made here) is not touched: see fmu_liveness.h. */
-    if (fmu_mark_freed(instance)) free_plant((Plant *)instance);
+    if (fmu_mark_freed(instance)) { free_buffers((Plant *)instance); fmu_retire(instance); }
 }
 
 const char *fmi3GetVersion(void) { return fmi3Version; }
@@ -310,6 +314,8 @@ fmi3Status fmi3Reset(fmi3Instance instance) {
 fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, fmi3Float64 values[], size_t nValues) {
     ENTER(instance, ANY_MODE & ~INSTANTIATED, "fmi3GetFloat64");
     if (nValues != nvr) return fail(p, "fmi3GetFloat64: nValues %zu must equal nValueReferences %zu (scalars only)", nValues, nvr);
+    REQUIRE_VALUES(vr, nvr, "fmi3GetFloat64");
+    REQUIRE_VALUES(values, nValues, "fmi3GetFloat64");
     for (size_t i = 0; i < nvr; i++)
         if (vr[i] >= p->n) return fail(p, "fmi3GetFloat64: no Float64 variable has value reference %u", (unsigned)vr[i]);
     if (p->mode != ERROR_STATE && derive(p, "fmi3GetFloat64") != fmi3OK) return fmi3Error;
@@ -321,6 +327,8 @@ fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], 
     ENTER(instance, SETTABLE, "fmi3SetFloat64");
     const size_t state = 1, derivative = state + NX, input = derivative + NX, output = input + NU, parameter = output + NY;
     if (nValues != nvr) return fail(p, "fmi3SetFloat64: nValues %zu must equal nValueReferences %zu (scalars only)", nValues, nvr);
+    REQUIRE_VALUES(vr, nvr, "fmi3SetFloat64");
+    REQUIRE_VALUES(values, nValues, "fmi3SetFloat64");
     for (size_t i = 0; i < nvr; i++) {  /* check everything first: a refused call changes nothing */
         const size_t r = vr[i];
         const int early = (p->mode & (INSTANTIATED | INITIALIZATION)) != 0;
@@ -357,12 +365,15 @@ fmi3Status fmi3GetFMUState(fmi3Instance instance, fmi3FMUState *state) {
     ENTER(instance, ANY_MODE & ~ERROR_STATE, "fmi3GetFMUState");
     if (state == NULL) return fail(p, "fmi3GetFMUState: FMUState is NULL");
     Snapshot *s = *state;
+    if (s != NULL && !ours(s)) return fail(p, "fmi3GetFMUState: FMUState is not NULL nor a state of this FMU");
     if (s == NULL) {
         s = calloc(1, sizeof(Snapshot));
         if (s == NULL || (s->v = calloc(p->n, sizeof(double))) == NULL) {
             free(s);
             return fail(p, "fmi3GetFMUState: out of memory");
         }
+        s->magic = SNAPSHOT_MAGIC;
+        s->token = plant_model.guid;
     }
     s->mode = p->mode;
     memcpy(s->v, p->v, p->n * sizeof(double));
@@ -374,6 +385,12 @@ fmi3Status fmi3SetFMUState(fmi3Instance instance, fmi3FMUState state) {
     ENTER(instance, ANY_MODE, "fmi3SetFMUState");
     if (state == NULL) return fail(p, "fmi3SetFMUState: FMUState is NULL");
     const Snapshot *s = state;
+    if (!ours(s)) return fail(p, "fmi3SetFMUState: the state is not one of this FMU (another FMU's, or no state at all)");
+    const size_t parameter = 1 + 2 * (size_t)NX + NU + NY;  /* as fmi3SetFloat64 checks a value set alone */
+    for (size_t r = 0; r < p->n; r++) {
+        const char *range = r >= parameter ? out_of_range((int)(r - parameter), s->v[r]) : isfinite(s->v[r]) ? NULL : "finite";
+        if (range != NULL) return fail(p, "fmi3SetFMUState: %s must be %s, got %g", name_of(r), range, s->v[r]);
+    }
     memcpy(p->v, s->v, p->n * sizeof(double));
     p->mode = s->mode;
     p->derived_valid = p->jacobians_valid = p->zoh_valid = 0;
@@ -383,6 +400,7 @@ fmi3Status fmi3SetFMUState(fmi3Instance instance, fmi3FMUState state) {
 fmi3Status fmi3FreeFMUState(fmi3Instance instance, fmi3FMUState *state) {
     ENTER(instance, ANY_MODE, "fmi3FreeFMUState");
     if (state != NULL && *state != NULL) {
+        if (!ours(*state)) return fail(p, "fmi3FreeFMUState: the state is not one of this FMU (another FMU's, or none)");
         free(((Snapshot *)*state)->v);
         free(*state);
         *state = NULL;
@@ -394,6 +412,7 @@ fmi3Status fmi3FreeFMUState(fmi3Instance instance, fmi3FMUState *state) {
 fmi3Status fmi3SerializedFMUStateSize(fmi3Instance instance, fmi3FMUState state, size_t *size) {
     ENTER(instance, ANY_MODE, "fmi3SerializedFMUStateSize");
     if (state == NULL || size == NULL) return fail(p, "fmi3SerializedFMUStateSize: NULL FMUState or size");
+    if (!ours(state)) return fail(p, "fmi3SerializedFMUStateSize: the state is not one of this FMU");
     *size = (p->n + 1) * sizeof(double);
     return fmi3OK;
 }
@@ -403,6 +422,7 @@ fmi3Status fmi3SerializeFMUState(fmi3Instance instance, fmi3FMUState state, fmi3
     if (state == NULL || bytes == NULL || size != (p->n + 1) * sizeof(double))
         return fail(p, "fmi3SerializeFMUState: NULL FMUState or buffer, or a buffer of the wrong size %zu", size);
     const Snapshot *s = state;
+    if (!ours(s)) return fail(p, "fmi3SerializeFMUState: the state is not one of this FMU");
     const double mode = (double)s->mode;
     memcpy(bytes, &mode, sizeof mode);
     memcpy(bytes + sizeof mode, s->v, p->n * sizeof(double));
@@ -417,10 +437,9 @@ fmi3Status fmi3DeserializeFMUState(fmi3Instance instance, const fmi3Byte bytes[]
     memcpy(&mode, bytes, sizeof mode);
     if (!(mode >= 1.0 && mode <= (double)ANY_MODE) || mode != floor(mode))
         return fail(p, "fmi3DeserializeFMUState: the bytes are not a serialised state of this FMU");
-    Snapshot scratch = {(Mode)mode, NULL};
-    if (fmi3GetFMUState(instance, state) != fmi3OK) return fmi3Error;
+    if (fmi3GetFMUState(instance, state) != fmi3OK) return fmi3Error;  /* a snapshot to fill, with its marks */
     memcpy(((Snapshot *)*state)->v, bytes + sizeof mode, p->n * sizeof(double));
-    ((Snapshot *)*state)->mode = scratch.mode;
+    ((Snapshot *)*state)->mode = (Mode)mode;
     return fmi3OK;
 }
 
@@ -430,6 +449,10 @@ fmi3Status fmi3GetDirectionalDerivative(fmi3Instance instance, const fmi3ValueRe
     ENTER(instance, INITIALIZATION | RUNNING | TERMINATED, "fmi3GetDirectionalDerivative");
     const size_t x = 1, dx = x + NX, u = dx + NX, y = u + NU, par = y + NY;
     if (nSeed != nKnowns || nSensitivity != nUnknowns) return fail(p, "fmi3GetDirectionalDerivative: scalars only");
+    REQUIRE_VALUES(unknowns, nUnknowns, "fmi3GetDirectionalDerivative");
+    REQUIRE_VALUES(knowns, nKnowns, "fmi3GetDirectionalDerivative");
+    REQUIRE_VALUES(seed, nSeed, "fmi3GetDirectionalDerivative");
+    REQUIRE_VALUES(sensitivity, nSensitivity, "fmi3GetDirectionalDerivative");
     if (jacobians(p, "fmi3GetDirectionalDerivative") != fmi3OK) return fmi3Error;
     for (size_t i = 0; i < nUnknowns; i++) {
         double sum = 0.0;
@@ -489,7 +512,8 @@ fmi3Status fmi3SetTime(fmi3Instance instance, fmi3Float64 time) {
 
 fmi3Status fmi3SetContinuousStates(fmi3Instance instance, const fmi3Float64 x[], size_t n) {
     ENTER(instance, CONTINUOUS_TIME | EVENT_MODE, "fmi3SetContinuousStates");
-    if (n != (size_t)NX || (n > 0 && x == NULL)) return fail(p, "fmi3SetContinuousStates: nx must be %d, got %zu", NX, n);
+    if (n != (size_t)NX) return fail(p, "fmi3SetContinuousStates: nx must be %d, got %zu", NX, n);
+    REQUIRE_VALUES(x, n, "fmi3SetContinuousStates");
     if (!finite_all(x, n)) return fail(p, "fmi3SetContinuousStates: states must be finite");
     memcpy(X(p), x, n * sizeof(double));
     p->derived_valid = 0;
@@ -500,6 +524,7 @@ fmi3Status fmi3SetContinuousStates(fmi3Instance instance, const fmi3Float64 x[],
 fmi3Status fmi3GetContinuousStateDerivatives(fmi3Instance instance, fmi3Float64 derivatives[], size_t n) {
     ENTER(instance, ANY_MODE & ~INSTANTIATED, "fmi3GetContinuousStateDerivatives");
     if (n != (size_t)NX) return fail(p, "fmi3GetContinuousStateDerivatives: nx must be %d, got %zu", NX, n);
+    REQUIRE_VALUES(derivatives, n, "fmi3GetContinuousStateDerivatives");
     if (p->mode != ERROR_STATE && derive(p, "fmi3GetContinuousStateDerivatives") != fmi3OK) return fmi3Error;
     memcpy(derivatives, DX(p), n * sizeof(double));
     return fmi3OK;
@@ -514,6 +539,7 @@ fmi3Status fmi3GetEventIndicators(fmi3Instance instance, fmi3Float64 indicators[
 fmi3Status fmi3GetContinuousStates(fmi3Instance instance, fmi3Float64 x[], size_t n) {
     ENTER(instance, ANY_MODE & ~INSTANTIATED, "fmi3GetContinuousStates");
     if (n != (size_t)NX) return fail(p, "fmi3GetContinuousStates: nx must be %d, got %zu", NX, n);
+    REQUIRE_VALUES(x, n, "fmi3GetContinuousStates");
     memcpy(x, X(p), n * sizeof(double));
     return fmi3OK;
 }
@@ -521,6 +547,7 @@ fmi3Status fmi3GetContinuousStates(fmi3Instance instance, fmi3Float64 x[], size_
 fmi3Status fmi3GetNominalsOfContinuousStates(fmi3Instance instance, fmi3Float64 nominals[], size_t n) {
     ENTER(instance, ANY_MODE, "fmi3GetNominalsOfContinuousStates");
     if (n != (size_t)NX) return fail(p, "fmi3GetNominalsOfContinuousStates: nx must be %d, got %zu", NX, n);
+    REQUIRE_VALUES(nominals, n, "fmi3GetNominalsOfContinuousStates");
     memcpy(nominals, plant_model.state_nominal, n * sizeof(double));
     return fmi3OK;
 }

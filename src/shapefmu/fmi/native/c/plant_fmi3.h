@@ -43,4 +43,9 @@ fmi3Status plant_fmi3_fail(Plant *p, const char *format, ...);
     if (!fmu_is_live(p, function)) return fmi3Error;                                          \
     if (!(p->mode & (allowed))) return fail(p, "%s: not allowed in the current state (mode %d)", function, (int)p->mode)
 
+/* A caller's array of count values must exist: NULL with count > 0 is refused, not dereferenced. */
+#define REQUIRE_VALUES(array, count, function)                                                      \
+    if ((count) > 0 && (array) == NULL)                                                             \
+    return fail(p, "%s: %s is NULL but holds %zu values", function, #array, (size_t)(count))
+
 #endif

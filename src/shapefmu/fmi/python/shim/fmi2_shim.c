@@ -366,6 +366,31 @@ EXPORT fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], 
     return merge(s, inner.GetString(s->component, vr, nvr, value));
 }
 
+/* Whether `text` is well-formed UTF-8 (RFC 3629: no overlong forms, surrogates or code points past
+ * U+10FFFF). The export library decodes it into a Python str, and a failed decoding is a Python error,
+ * which it reports as fmi2Fatal: a string a host got wrong is refused here with fmi2Error instead. */
+static int is_utf8(const unsigned char* text)
+{
+    while (*text) {
+        const unsigned char c = *text++;
+        int more;
+        unsigned long code;
+        if (c < 0x80) continue;
+        if (c >= 0xC2 && c <= 0xDF) { more = 1; code = c & 0x1F; }
+        else if (c >= 0xE0 && c <= 0xEF) { more = 2; code = c & 0x0F; }
+        else if (c >= 0xF0 && c <= 0xF4) { more = 3; code = c & 0x07; }
+        else return 0;
+        for (; more > 0; more--, text++) {
+            if ((*text & 0xC0) != 0x80) return 0;
+            code = (code << 6) | (*text & 0x3F);
+        }
+        if ((c == 0xE0 && code < 0x800) || (code >= 0xD800 && code <= 0xDFFF) || (c == 0xF0 && code < 0x10000)
+            || code > 0x10FFFF)
+            return 0;
+    }
+    return 1;
+}
+
 EXPORT fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2String value[])
 {
     size_t i;
@@ -374,6 +399,7 @@ EXPORT fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], 
     if (vr == NULL || value == NULL) return refuse(s, "fmi2SetString: NULL array");
     for (i = 0; i < nvr; i++) {
         if (value[i] == NULL) return refuse(s, "fmi2SetString: NULL string");
+        if (!is_utf8((const unsigned char*)value[i])) return refuse(s, "fmi2SetString: a string that is not UTF-8 text");
     }
     return merge(s, inner.SetString(s->component, vr, nvr, value));
 }

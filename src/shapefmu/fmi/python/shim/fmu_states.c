@@ -9,7 +9,9 @@
  * the mode, three zero bytes, then the export library's bytes; fmi2DeSerializeFMUstate refuses
  * bytes without it. No state is saved in the error state (there is nothing sound to save), so the
  * error state is never restored. The checks the export library would crash on are made here too: a
- * NULL state or buffer, and a buffer smaller than fmi2SerializedFMUstateSize.
+ * NULL state or buffer, a buffer smaller than fmi2SerializedFMUstateSize, and a state this front end
+ * did not save (another FMU's, or a pointer that is no state): a Saved carries a mark and the GUID of
+ * its FMU, and one without them is refused with fmi2Error rather than handed to the export library.
  */
 #include <stdlib.h>
 #include <string.h>
@@ -21,10 +23,31 @@
 #define HEADER_SIZE 8
 static const char MAGIC[4] = {'S', 'F', 'M', 'U'};
 
+#define SAVED_MAGIC 0x53464d5553746174ULL /* "SFMUStat" */
+
 typedef struct {
+    unsigned long long magic;
+    const char* guid;   /* this FMU's SHIM_GUID: the address of the string in this library */
     fmi2FMUstate inner; /* the export library's state */
     Mode mode;
 } Saved;
+
+/* state as a Saved of this FMU, or NULL. */
+static Saved* ours(fmi2FMUstate state)
+{
+    Saved* saved = (Saved*)state;
+    return saved != NULL && saved->magic == SAVED_MAGIC && saved->guid == SHIM_GUID && saved->inner != NULL ? saved : NULL;
+}
+
+static Saved* new_saved(void)
+{
+    Saved* saved = (Saved*)calloc(1, sizeof(Saved));
+    if (saved != NULL) {
+        saved->magic = SAVED_MAGIC;
+        saved->guid = SHIM_GUID;
+    }
+    return saved;
+}
 
 EXPORT fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate* state)
 {
@@ -35,9 +58,11 @@ EXPORT fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate* state)
     /* FMI 2.0: a non-NULL *state is a state of this instance to update. */
     saved = (Saved*)*state;
     if (saved == NULL) {
-        saved = (Saved*)calloc(1, sizeof(Saved));
+        saved = new_saved();
         if (saved == NULL) return refuse(s, "fmi2GetFMUstate: out of memory");
-    } else if (saved->inner != NULL) {
+    } else if (ours(saved) == NULL) {
+        return refuse(s, "fmi2GetFMUstate: *FMUstate is neither NULL nor a state of this FMU");
+    } else {
         inner.FreeFMUstate(s->component, &saved->inner);
         saved->inner = NULL;
     }
@@ -54,10 +79,10 @@ EXPORT fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate* state)
 
 EXPORT fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate state)
 {
-    Saved* saved = (Saved*)state;
+    Saved* saved = ours(state);
     fmi2Status status;
     BEGIN(c, ANY_MODE);
-    if (saved == NULL || saved->inner == NULL) return refuse(s, "fmi2SetFMUstate: NULL state");
+    if (saved == NULL) return refuse(s, "fmi2SetFMUstate: NULL, or not a state of this FMU");
     status = merge(s, inner.SetFMUstate(s->component, saved->inner));
     if (status <= fmi2Warning) s->mode = saved->mode;
     return status;
@@ -69,8 +94,10 @@ EXPORT fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate* state)
     fmi2Status status = fmi2OK;
     BEGIN(c, ANY_MODE);
     if (state == NULL || *state == NULL) return fmi2OK;
-    saved = (Saved*)*state;
-    if (saved->inner != NULL) status = merge(s, inner.FreeFMUstate(s->component, &saved->inner));
+    saved = ours(*state);
+    if (saved == NULL) return refuse(s, "fmi2FreeFMUstate: not a state of this FMU");
+    status = merge(s, inner.FreeFMUstate(s->component, &saved->inner));
+    saved->magic = 0;
     free(saved);
     *state = NULL;
     return status;
@@ -78,11 +105,11 @@ EXPORT fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate* state)
 
 EXPORT fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate state, size_t* size)
 {
-    Saved* saved = (Saved*)state;
+    Saved* saved = ours(state);
     fmi2Status status;
     BEGIN(c, ANY_MODE);
-    if (saved == NULL || saved->inner == NULL || size == NULL) {
-        return refuse(s, "fmi2SerializedFMUstateSize: NULL state or size");
+    if (saved == NULL || size == NULL) {
+        return refuse(s, "fmi2SerializedFMUstateSize: NULL size, or a state that is none of this FMU");
     }
     status = merge(s, inner.SerializedFMUstateSize(s->component, saved->inner, size));
     if (status <= fmi2Warning) *size += HEADER_SIZE;
@@ -91,12 +118,12 @@ EXPORT fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate state
 
 EXPORT fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate state, fmi2Byte serializedState[], size_t size)
 {
-    Saved* saved = (Saved*)state;
+    Saved* saved = ours(state);
     size_t needed = 0;
     fmi2Status status;
     BEGIN(c, ANY_MODE);
-    if (saved == NULL || saved->inner == NULL || serializedState == NULL) {
-        return refuse(s, "fmi2SerializeFMUstate: NULL state or buffer");
+    if (saved == NULL || serializedState == NULL) {
+        return refuse(s, "fmi2SerializeFMUstate: NULL buffer, or a state that is none of this FMU");
     }
     status = inner.SerializedFMUstateSize(s->component, saved->inner, &needed);
     if (status > fmi2Warning) return merge(s, status);
@@ -130,7 +157,7 @@ EXPORT fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serial
         return refuse(s, "fmi2DeSerializeFMUstate: these bytes are not a state written by fmi2SerializeFMUstate of "
             "this FMU (no SFMU header)");
     }
-    saved = (Saved*)calloc(1, sizeof(Saved));
+    saved = new_saved();
     if (saved == NULL) return refuse(s, "fmi2DeSerializeFMUstate: out of memory");
     status = merge(s, inner.DeSerializeFMUstate(s->component, serializedState + HEADER_SIZE, size - HEADER_SIZE,
         &saved->inner));

@@ -25,7 +25,7 @@ import math
 from ....runtime.checks import check_count, check_positive
 from ....runtime.ekf import ResonanceEKF
 from ....runtime.ekf_tuner import KINDS, EKFTunedShaperKernel
-from ....runtime.sample_clock import SampleClock
+from ....runtime.sample_clock import EKF_SAMPLE_SECONDS, SampleClock, samples_per_python_step
 from ....runtime.shaper_filter import StreamingShaper
 from ..slave_base import Fmi2Slave, sampled_description
 
@@ -68,7 +68,7 @@ class EKFTuner(Fmi2Slave):
             values["retune_fraction"],
             amplitude=values["amplitude"],
         )
-        self.clock = SampleClock(ts, self.time)
+        self.clock = SampleClock(ts, self.time, samples_per_python_step(EKF_SAMPLE_SECONDS))
         values["y"] = 0.0
         self._estimates()
 

@@ -44,7 +44,7 @@ import math
 
 from ....runtime import time_frequency, twin_pulse, window_filters
 from ....runtime.checks import check_count, check_finite, check_positive, check_zeta
-from ....runtime.sample_clock import SampleClock
+from ....runtime.sample_clock import FIR_SAMPLE_SECONDS, SampleClock, samples_per_python_step
 from ....runtime.shaper_filter import FeedthroughFIR, StreamingShaper
 from ..slave_base import Fmi2Slave, sampled_description
 
@@ -146,7 +146,9 @@ class ShapeFilter(Fmi2Slave):
             taps = [0.0, *taps[1:]]
         self.taps = tuple(taps)
         self.fir = FeedthroughFIR.from_taps(taps, u0)
-        self.clock = SampleClock(ts, self.time)
+        fixed, per_term = FIR_SAMPLE_SECONDS
+        terms = sum(1 for w in taps if w != 0.0)
+        self.clock = SampleClock(ts, self.time, samples_per_python_step(fixed + per_term * terms))
         values["Ts_used"] = ts
         values["y"] = self.fir.output(check_finite(values["u"], "u"))
 

@@ -27,7 +27,7 @@ import math
 
 from ....runtime import shaper_designs
 from ....runtime.checks import aliased_modes, check_count, check_finite, check_positive, check_size, check_vtol
-from ....runtime.sample_clock import SampleClock
+from ....runtime.sample_clock import FIR_SAMPLE_SECONDS, SampleClock, samples_per_python_step
 from ....runtime.shaper_filter import FeedthroughFIR, StreamingShaper, grid_impulses
 from ..slave_base import WARNING, Fmi2Slave, sampled_description
 
@@ -73,7 +73,8 @@ class Shaper(Fmi2Slave):
         delays, weights = grid_impulses(times, amplitudes, ts)
         self.design = (tuple(times), tuple(amplitudes))
         self.fir = FeedthroughFIR(delays, weights, u0)
-        self.clock = SampleClock(ts, self.time)
+        fixed, per_term = FIR_SAMPLE_SECONDS
+        self.clock = SampleClock(ts, self.time, samples_per_python_step(fixed + per_term * len(delays)))
         values["y"] = self.fir.output(check_finite(values["u"], "u"))
 
     def _warn_above_nyquist(self, modes, ts):

@@ -24,7 +24,7 @@ import math
 
 from ....runtime import shaper_designs
 from ....runtime.checks import check_count, check_finite, check_positive
-from ....runtime.sample_clock import SampleClock
+from ....runtime.sample_clock import STOS_SAMPLE_SECONDS, SampleClock, samples_per_python_step
 from ....runtime.stos import STOSKernel, stos_curves
 from ..slave_base import Fmi2Slave, sampled_description
 
@@ -79,7 +79,8 @@ class STOSController(Fmi2Slave):
             settle = {name: check_finite(values[name], name) for name in SETTLE_GAINS}
             settle["Ts"] = ts
         self.kernel = STOSKernel(curves, settle)
-        self.clock = SampleClock(ts, self.time)
+        fixed, per_impulse = STOS_SAMPLE_SECONDS
+        self.clock = SampleClock(ts, self.time, samples_per_python_step(fixed + per_impulse * len(times)))
         self._preview(self._inputs())
 
     def _inputs(self):
