@@ -68,3 +68,53 @@ def plot_motion_profile(profile, path, title: str = "") -> Path:
     axes[0].set_title(title)
     axes[-1].set_xlabel("time [s]")
     return save_figure(fig, path)
+
+
+def plot_identified(found, path) -> Path:
+    """The spectrum of each identified recording with its modes marked."""
+    fig, ax = plt.subplots(figsize=(9, 5))
+    for item in found:
+        s = item.spectrum
+        line, = ax.semilogy(s.freq, s.psd, lw=1, label=f"{Path(s.source).name} ({s.axis})")
+        for mode in item.modes.modes:
+            ax.axvline(mode.frequency, color=line.get_color(), ls=":", lw=1)
+            ax.annotate(f"{mode.frequency:.1f} Hz\nzeta {mode.zeta:.3f}", (mode.frequency, mode.peak), fontsize=8,
+                        xytext=(4, 0), textcoords="offset points")
+    top = max(max((m.frequency for m in i.modes.modes), default=i.spectrum.freq[-1] / 3) for i in found)
+    ax.set_xlim(0, min(3 * top, max(i.spectrum.freq[-1] for i in found)))
+    ax.set_xlabel("frequency (Hz)")
+    ax.set_ylabel("power spectral density")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    return save_figure(fig, path)
+
+
+def plot_recommendation(spectra, advice, path) -> Path:
+    """The measured spectra (left axis) and every candidate's remaining-vibration curve V(f) (right
+    axis, worst over the damping range): the pick and the best of Klipper's six drawn bold."""
+    from shapefmu.identification.recommend import remaining_curve
+
+    fig, ax = plt.subplots(figsize=(10, 6))
+    top = 2.5 * max(m.frequency for m in advice.modes) if advice.modes else spectra[0].freq[-1]
+    for s in spectra:
+        keep = s.freq <= top
+        ax.plot(s.freq[keep], s.psd[keep], color="k", lw=1.2, label=f"spectrum {Path(s.source).name} ({s.axis})")
+    ax.set_xlabel("frequency (Hz)")
+    ax.set_ylabel("power spectral density")
+    ax.set_xlim(0, top)
+    right = ax.twinx()
+    freq = np.linspace(0.5, top, 2000)
+    for c in advice.candidates:
+        bold = c is advice.pick or c is advice.baseline
+        label = f"{c.label} {'/'.join(f'{f:.1f}' for f in c.frequencies)} Hz: {100 * c.vibration:.1f} %, " \
+                f"{c.max_accel:.0f} mm/s^2" + (" (pick)" if c is advice.pick else "") + \
+                (" (best of Klipper's six)" if c is advice.baseline else "")
+        right.plot(freq, remaining_curve(c, freq, advice.dampings), lw=2.2 if bold else 0.7,
+                   alpha=1.0 if bold else 0.5, label=label)
+    right.set_ylabel("vibration left by the shaper (worst over damping)")
+    right.set_ylim(0, 1.05)
+    lines = ax.get_legend_handles_labels()
+    more = right.get_legend_handles_labels()
+    right.legend(lines[0] + more[0], lines[1] + more[1], fontsize=6, loc="upper right", ncol=2)
+    ax.set_title(f"pick: {advice.pick.label}; vibration bound {100 * advice.bound:.2f} %")
+    return save_figure(fig, path)

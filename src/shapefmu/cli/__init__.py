@@ -39,12 +39,12 @@ import zipfile
 import zlib
 
 from shapefmu import __version__
-from shapefmu.cli import build, design, moves, plant, simulate, sweep
+from shapefmu.cli import build, design, identify, moves, plant, simulate, sweep
 from shapefmu.cli.signals import exit_code, interrupts
 from shapefmu.cosim.errors import CosimError
 
 # The order of the groups in ``shapefmu --help``.
-COMMAND_GROUPS = (design, plant, moves, build, sweep, simulate)
+COMMAND_GROUPS = (design, identify, plant, moves, build, sweep, simulate)
 
 
 class _Parser(argparse.ArgumentParser):

@@ -1,0 +1,240 @@
+"""``shapefmu identify`` and ``shapefmu recommend``: from a recording of the machine to its shaper.
+
+    shapefmu identify RECORDING... [--axis x|y|z|xyz|DX,DY,DZ] [--time COL | --fs HZ] [--column COL]
+    shapefmu recommend RECORDING... | --mode HZ[:ZETA]... [--max-smoothing MM] [--max-vibration FRACTION]
+                       [--accel MM_S2] [--scv MM_S] [--plot PNG] [--json] [--build OUT.fmu [--python]]
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+from pathlib import Path
+
+from shapefmu.cli.arguments import output_file, parse_mode
+
+AXIS_CHOICES = ("x", "y", "z", "xyz")
+# Klipper's defaults (shapefmu.identification.metrics), repeated so that --help imports no SciPy
+DEFAULT_MAX_SMOOTHING, DEFAULT_ACCEL, DEFAULT_SCV = 0.12, 5000.0, 5.0
+
+_PROGRESS_AFTER = 1.0  # s: a recommendation that takes longer says what it is doing
+
+
+def _axis(text: str):
+    if text in AXIS_CHOICES or "," not in text:  # an axis, or a column of a table
+        return text
+    parts = text.split(",")
+    try:
+        direction = tuple(float(p) for p in parts)
+    except ValueError:
+        direction = ()
+    if len(direction) != 3 or not all(math.isfinite(d) for d in direction) or not any(direction):
+        raise ValueError(f"--axis must be x, y, z, xyz, a column name or a direction DX,DY,DZ (three numbers, not all "
+                         f"0), got {text!r}")
+    return direction
+
+
+def _identify_all(args):
+    from shapefmu.identification import identify
+
+    if len(args.recording) > 64:
+        raise ValueError(f"at most 64 recordings are judged together, got {len(args.recording)}")
+    axis = _axis(args.axis)
+    return [identify(path, axis=axis, time_column=args.time, fs=args.fs, columns=args.column or None,
+                     undo_sweep=args.undo_sweep, excitation=args.excitation, response=args.response,
+                     f_min=args.f_min, f_max=args.f_max, ringdown=args.ringdown) for path in args.recording]
+
+
+def _print_identified(found) -> None:
+    if found.recording is not None:
+        print(found.recording.describe())
+    else:
+        print(f"{found.spectrum.source}: Klipper spectrum file, axis {found.spectrum.axis}")
+    print(f"  spectrum: {found.spectrum.settings}")
+    modes = found.modes
+    if not modes.modes:
+        print(f"  no resonance above the threshold: no peak within 3 decades of the highest with a prominence of "
+              f"0.5 decades (noise floor {modes.noise_floor:.3g})")
+        return
+    print(f"  {len(modes.modes)} mode(s), {modes.response} response, {modes.excitation} excitation "
+          f"(standard errors from the fit; a lower bound):")
+    for mode in modes.modes:
+        print(f"    {mode.describe()}")
+
+
+def _cmd_identify(args) -> int:
+    found = _identify_all(args)
+    if args.json:
+        print(json.dumps([{"source": f.spectrum.source, "settings": f.spectrum.settings,
+                           "modes": [{"frequency_hz": m.frequency, "zeta": m.zeta, "frequency_sd": m.frequency_sd,
+                                      "zeta_sd": m.zeta_sd, "method": m.method,
+                                      "log_decrement_zeta": m.log_decrement_zeta} for m in f.modes.modes]}
+                          for f in found], indent=2))
+    else:
+        for f in found:
+            _print_identified(f)
+    if args.plot:
+        from shapefmu.plots import plot_identified
+
+        print(f"spectrum plot written to {plot_identified(found, args.plot)}")
+    return 0
+
+
+def _progress():
+    import time
+
+    start = time.monotonic()
+
+    def say(text):
+        if time.monotonic() - start > _PROGRESS_AFTER:
+            print(f"  ... {text}", file=sys.stderr, flush=True)
+
+    return say
+
+
+def _cmd_recommend(args) -> int:
+    from shapefmu.identification import Mode, recommend
+    from shapefmu.identification.synthetic import SyntheticMode, transmissibility
+
+    if bool(args.recording) == bool(args.mode):
+        raise ValueError("give recordings or --mode HZ[:ZETA] (one or more), not both and not neither")
+    if args.recording:
+        found = _identify_all(args)
+        if not args.json:
+            for f in found:
+                _print_identified(f)
+        spectra = [f.spectrum for f in found]
+        modes = _merged_modes([f.modes.modes for f in found])
+        if not modes:
+            raise ValueError("no resonance found in the recordings, so there is nothing to shape (see identify's output)")
+    else:
+        import numpy as np
+
+        modes = tuple(Mode(w / (2 * math.pi), z, 0.0, 0.0, 1.0, "given") for w, z in args.mode)
+        # Without a recording, the spectrum is the modes' own: each as a unit-share transmitted mode.
+        top = max(m.frequency for m in modes)
+        freq = np.linspace(0.2, 3 * top, 6000)
+        psd = sum(np.abs(transmissibility([SyntheticMode(m.frequency, max(m.zeta, 0.005))], freq)) ** 2 for m in modes)
+        from shapefmu.identification.spectra import Spectrum
+
+        spectra = [Spectrum("--mode", "model", freq, psd, "the given modes' transmissibility, summed")]
+    advice = recommend(spectra, modes, accel=args.accel, scv=args.scv, max_smoothing=args.max_smoothing,
+                       max_vibration=args.max_vibration, ts=args.filter_ts, progress=_progress())
+    if args.json:
+        print(json.dumps(advice.to_json(), indent=2))
+    else:
+        _print_table(advice)
+    if args.plot:
+        from shapefmu.plots import plot_recommendation
+
+        print(f"recommendation plot written to {plot_recommendation(spectra, advice, args.plot)}")
+    if args.build:
+        for path in _build(advice.pick, Path(args.build), python=args.python):
+            print(f"wrote {path}")
+    return 0
+
+
+def _merged_modes(per_file):
+    """The modes of several recordings: one per distinct frequency (within 3 %), as first found."""
+    merged = []
+    for modes in per_file:
+        for mode in modes:
+            same = [m for m in merged if abs(m.frequency - mode.frequency) <= 0.03 * m.frequency]
+            if not same:
+                merged.append(mode)
+    return tuple(sorted(merged, key=lambda m: -m.peak))
+
+
+def _print_table(advice) -> None:
+    print(f"shapers judged on Klipper's metrics: vibration = share of the spectrum above max/20 left, worst over "
+          f"damping {', '.join(f'{z:g}' for z in advice.dampings)}; smoothing at {advice.accel:g} mm/s^2 and "
+          f"{advice.scv:g} mm/s square corner; max accel for smoothing <= {advice.max_smoothing:g} mm")
+    print(f"{'shaper':<16} {'frequencies Hz':<16} {'vibration':>9} {'at modes':>8} {'smoothing':>9} "
+          f"{'max accel':>9} {'duration':>9}")
+    for c in advice.candidates:
+        marks = (" <- pick" if c is advice.pick else "") + (" <- best of Klipper's six" if c is advice.baseline else "")
+        print(f"{c.label:<16} {'/'.join(f'{f:.1f}' for f in c.frequencies):<16} {100 * c.vibration:8.2f}% "
+              f"{100 * c.at_modes:7.1f}% {c.smoothing:8.3f}mm {c.max_accel:9.0f} {1000 * c.duration:7.1f}ms{marks}")
+    if advice.baseline not in advice.candidates:
+        c = advice.baseline
+        print(f"best of Klipper's six: {c.label} at {c.frequencies[0]:.1f} Hz, {100 * c.vibration:.2f}%, "
+              f"max accel {c.max_accel:.0f}")
+    pick, base = advice.pick, advice.baseline
+    gain = pick.max_accel / base.max_accel if base.max_accel > 0 else math.inf
+    print(f"pick: {pick.label} at {'/'.join(f'{f:.2f}' for f in pick.frequencies)} Hz: vibration "
+          f"{100 * pick.vibration:.2f}% (Klipper's six at best: {100 * base.vibration:.2f}%), max accel "
+          f"{pick.max_accel:.0f} mm/s^2 ({gain:.2f} x the best of Klipper's six, {base.label})")
+
+
+def _build(pick, out: Path, *, python: bool) -> list[Path]:
+    """The pick as a Shaper or ShapeFilter FMU (native unless ``python``) and its .ssv parameter set."""
+    from shapefmu.fmi.ssp import write_ssv
+
+    if pick.family == "window":
+        model = "ShapeFilter"
+        starts = {"kind": pick.kind, "f": pick.frequencies[0], "zeta": pick.zetas[0], "Ts": pick.ts,
+                  "adjust_Ts": True}
+    else:
+        model = "Shaper"
+        kind = pick.kind
+        starts = {"kind": kind, "n": 1, "vtol": 0.05, "n_modes": len(pick.frequencies)}
+        for i, (f, z) in enumerate(zip(pick.frequencies, pick.zetas * len(pick.frequencies)), start=1):
+            starts[f"f[{i}]"] = f
+            starts[f"zeta[{i}]"] = min(z, 0.5)
+        starts["Ts"] = 1.0 / (200.0 * max(pick.frequencies))
+    if python:
+        from shapefmu.fmi.python.builder import build_fmu as builder
+    else:
+        from shapefmu.fmi.native.sampled import build_native_fmu as builder
+    fmu = builder(model, out, **starts)
+    ssv = write_ssv(out.with_suffix(".ssv"), starts)
+    return [fmu, ssv]
+
+
+def _add_reading(p) -> None:
+    p.add_argument("--axis", default="xyz", help="x, y, z, xyz (the sum of the axes' spectra, default) or a "
+                                                 "direction DX,DY,DZ the samples are projected onto")
+    p.add_argument("--time", metavar="COLUMN", help="time column (s) of a CSV or Parquet table")
+    p.add_argument("--fs", type=float, metavar="HZ", help="sampling rate of a table without a time column")
+    p.add_argument("--column", action="append", metavar="COLUMN", help="signal column of a table (repeat for several)")
+    p.add_argument("--undo-sweep", action="store_true",
+                   help="divide out the f^2 of Klipper's sweep (acceleration proportional to frequency)")
+    p.add_argument("--excitation", choices=("sweep", "flat"),
+                   help="the excitation's spectrum: sweep (f^2, default for Klipper files) or flat")
+    p.add_argument("--response", choices=("transmitted", "mode"), default="transmitted",
+                   help="transmitted: an accelerometer on the carried part (default); mode: a displacement or error")
+    p.add_argument("--f-min", type=float, metavar="HZ", help="lowest frequency searched")
+    p.add_argument("--f-max", type=float, metavar="HZ", help="highest frequency searched")
+    p.add_argument("--ringdown", action="store_true", help="the recording is a free decay: refine each mode with the EKF")
+
+
+def register(commands) -> None:
+    p = commands.add_parser("identify", help="find the modes of a machine in a recording (Klipper, RepRapFirmware, CSV)")
+    p.add_argument("recording", nargs="+", help="recording files (format recognised from the content)")
+    _add_reading(p)
+    p.add_argument("--json", action="store_true", help="print the modes as JSON")
+    p.add_argument("--plot", metavar="PNG", type=output_file("plot"), help="save the spectrum with its modes")
+    p.set_defaults(run=_cmd_identify)
+
+    p = commands.add_parser("recommend", help="rank every shaper family on a recording and pick one")
+    p.add_argument("recording", nargs="*", help="recording files; several give one pick for the worst of them")
+    p.add_argument("--mode", type=parse_mode, action="append", metavar="HZ[:ZETA]", help="a mode, instead of recordings")
+    _add_reading(p)
+    p.add_argument("--max-smoothing", type=float, default=DEFAULT_MAX_SMOOTHING, metavar="MM",
+                   help=f"smoothing bound for the max accel (default {DEFAULT_MAX_SMOOTHING} mm, Klipper's)")
+    p.add_argument("--max-vibration", type=float, default=0.05, metavar="FRACTION",
+                   help="vibration bound of the pick (default 0.05)")
+    p.add_argument("--accel", type=float, default=DEFAULT_ACCEL, metavar="MM_S2",
+                   help=f"acceleration the smoothing is reported at (default {DEFAULT_ACCEL:g})")
+    p.add_argument("--scv", type=float, default=DEFAULT_SCV, metavar="MM_S",
+                   help=f"square-corner velocity (default {DEFAULT_SCV:g} mm/s)")
+    p.add_argument("--filter-ts", type=float, default=1e-3, metavar="S",
+                   help="sampling period of the window filters judged (default 1e-3 s)")
+    p.add_argument("--json", action="store_true", help="print the table, the pick and the settings as JSON")
+    p.add_argument("--plot", metavar="PNG", type=output_file("plot"),
+                   help="save the spectrum with every candidate's remaining-vibration curve")
+    p.add_argument("--build", metavar="OUT.fmu", type=output_file(".fmu", what="FMU"),
+                   help="write the pick as a Shaper or ShapeFilter FMU (native C) and OUT.ssv beside it")
+    p.add_argument("--python", action="store_true", help="with --build: the pythonfmu FMU instead of the native one")
+    p.set_defaults(run=_cmd_recommend)
