@@ -15,8 +15,8 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from scipy.signal import welch
 
-from shapefmu.identification.recordings import Recording
 
+# ``Recording`` (identification.recordings) is named in annotations only: recordings imports this module.
 AXIS_CHOICES = ("x", "y", "z", "xyz")
 RESOLUTION = 0.1  # Hz: Welch segments of 1/RESOLUTION s resolve a 0.02-damped mode at 10 Hz (0.4 Hz wide)
 MIN_SEGMENTS = 4
