@@ -57,23 +57,12 @@ def main() -> int:
     start = time.perf_counter()
     plain = straightforward(found.spectrum, sample, advice.dampings)
     per_design = (time.perf_counter() - start) / len(sample)
-    designs = _designs_scored(advice, found.modes.modes)
+    designs = advice.designs_scored
     loop = per_design * designs
     worst = max(abs(a - c.vibration) for a, c in zip(plain, sample))
     print(f"straightforward loop: {1000 * per_design:.2f} ms per design x {designs} designs = {loop:.1f} s; "
           f"ratio loop/ours {loop / ours:.1f} (largest score difference {worst:.1e})")
     return 0
-
-
-def _designs_scored(advice, modes) -> int:
-    """How many designs ``recommend`` scored (its grids, module docstring of identification.recommend)."""
-    low, high = 0.5 * min(m.frequency for m in modes), 2.0 * max(m.frequency for m in modes)
-    single = 9 * len(np.arange(math.log(low), math.log(high) + 0.0025, 0.005))
-    window = 5 * len(np.arange(math.log(low), math.log(high) + 0.01, 0.02))
-    pairs = len(modes) * (len(modes) - 1) // 2
-    coarse, fine = len(np.arange(math.log(0.5), math.log(2.5) + 0.015, 0.03)), len(np.arange(math.log(0.97), math.log(1.03) + 0.0025, 0.005))
-    multi = pairs * (6 * (coarse**2 + fine**2) + len(np.arange(math.log(0.6), math.log(1.6) + 0.0025, 0.005)))
-    return single + window + multi
 
 
 if __name__ == "__main__":

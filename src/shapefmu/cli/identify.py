@@ -179,7 +179,7 @@ def _build(pick, out: Path, *, python: bool) -> list[Path]:
         model = "Shaper"
         kind = pick.kind
         starts = {"kind": kind, "n": 1, "vtol": 0.05, "n_modes": len(pick.frequencies)}
-        for i, (f, z) in enumerate(zip(pick.frequencies, pick.zetas * len(pick.frequencies)), start=1):
+        for i, (f, z) in enumerate(zip(pick.frequencies, pick.zetas), start=1):
             starts[f"f[{i}]"] = f
             starts[f"zeta[{i}]"] = min(z, 0.5)
         starts["Ts"] = 1.0 / (200.0 * max(pick.frequencies))

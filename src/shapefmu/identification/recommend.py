@@ -98,6 +98,7 @@ class Recommendation:
     max_smoothing: float
     max_vibration: float
     bound: float
+    designs_scored: int
 
     def to_json(self) -> dict:
         return {"pick": self.pick.row(), "baseline_klipper_six": self.baseline.row(),
@@ -165,12 +166,10 @@ class _Judge:
             worst = r if worst is None else np.maximum(worst, r)
         return worst
 
-    def judge(self, kind, family, frequencies, zetas, times, amplitudes, v_of=None):
-        """Candidates for a batch (rows of ``times``), ``frequencies`` a list of tuples; V from
-        ``v_of`` (a ratio table) or, without one, computed from the impulses."""
+    def judge(self, kind, family, frequencies, zetas, times, amplitudes, v_of):
+        """Candidates for a batch (rows of ``times``), ``frequencies`` a list of tuples; ``v_of(freq)``
+        gives the batch's V (a ratio table or a sampled curve)."""
         ts = float(times[0][1] - times[0][0]) if family == "window" else None
-        if v_of is None:
-            v_of = lambda freq: metrics.residual(times, amplitudes, freq, self.dampings)  # noqa: E731
         vib = self.remaining(v_of)
         at = (v_of(self.mode_freqs).max(axis=(-1, -2)) if self.mode_freqs.size
               else np.zeros(len(frequencies)))
@@ -324,7 +323,9 @@ def recommend(spectra, modes, *, dampings=None, accel: float = metrics.DEFAULT_A
     rest = sorted((c for c in best if c.vibration > bound + 1e-12), key=lambda c: c.vibration)
     ranked = tuple(within + rest)
     pick = ranked[0] if within else baseline
-    return Recommendation(ranked, pick, baseline, modes, dampings, accel, scv, max_smoothing, max_vibration, bound)
+    scored = sum(len(points) for points in scans.values())
+    return Recommendation(ranked, pick, baseline, modes, dampings, accel, scv, max_smoothing, max_vibration, bound,
+                          scored)
 
 
 def remaining_curve(candidate: Candidate, freq, dampings) -> np.ndarray:
