@@ -3,9 +3,10 @@
 A two-mode machine (25 Hz, zeta 0.05 and 62 Hz, zeta 0.08) is recorded as Klipper's TEST_RESONANCES
 records it (a 60 s sweep, 3.2 kHz, jittered timestamps, noise) into results/resonances_x.csv. Then,
 as a user would: identify the modes, rank every shaper family on Klipper's metrics, build the pick
-as a native Shaper or ShapeFilter FMU with its .ssv, and run a move through that FMU in fmpy; the
-machine's response to the shaped and the unshaped move is drawn in results/recording_to_fmu.png,
-the spectrum with every candidate in results/recommendation.png.
+as a native Shaper or ShapeFilter FMU with its .ssv, and co-simulate a move through that FMU in
+shapefmu's master, driving a native plant FMU of each of the machine's modes (built from
+``synthetic.plant_model``). The machine's response to the shaped and the unshaped move is drawn in
+results/recording_to_fmu.png, the spectrum with every candidate in results/recommendation.png.
 
     .venv/bin/python examples/recording_to_fmu.py
 """
@@ -17,25 +18,15 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from fmpy import simulate_fmu  # noqa: E402
-from scipy.signal import lsim  # noqa: E402
 
 from shapefmu.cli import main  # noqa: E402
+from shapefmu.cosim.master import simulate  # noqa: E402
+from shapefmu.fmi.ssp import System  # noqa: E402
 from shapefmu.identification import identify, recommend  # noqa: E402
 from shapefmu.identification import synthetic as syn  # noqa: E402
 
 RESULTS = Path("results")
 MACHINE = [syn.SyntheticMode(25.0, 0.05, 0.6), syn.SyntheticMode(62.0, 0.08, 0.4)]
-
-
-def machine_response(t, command):
-    """Toolhead position of the machine for a commanded position (each mode's transmissibility)."""
-    total = np.zeros_like(command)
-    for mode in MACHINE:
-        w = 2 * math.pi * mode.frequency
-        total += mode.share * lsim(([2 * mode.zeta * w, w * w], [1, 2 * mode.zeta * w, w * w]), command, t)[1]
-    return total
 
 
 def main_example() -> None:
@@ -50,34 +41,37 @@ def main_example() -> None:
     fmu = RESULTS / "MachineShaper.fmu"
     main(["recommend", str(recording), "--axis", "x", "--plot", str(RESULTS / "recommendation.png"),
           "--build", str(fmu)])
-
     found = identify(recording, axis="x")
-    advice = recommend([found.spectrum], found.modes.modes)
-    step = 5e-5
-    stop = 0.3
-    moves = np.array([(0.0, 0.0), (0.01, 0.0), (0.03, 1.0), (stop, 1.0)], dtype=[("time", float), ("u", float)])
-    result = simulate_fmu(str(fmu), stop_time=stop, step_size=step, output_interval=step, input=moves, output=["y"])
+    pick = recommend([found.spectrum], found.modes.modes).pick
+
+    # the machine as plant FMUs, one per mode; the shaper FMU shapes a unit step (its input held at 1)
+    system = System("machine").add("shaper", fmu, parameters={"u": 1.0}, ssv=fmu.with_suffix(".ssv"))
+    for i, mode in enumerate(MACHINE):
+        model = RESULTS / f"machine_mode{i}.toml"
+        model.write_text(syn.plant_model(mode, f"machine_mode{i}"))
+        main(["plant", "build", str(model), "-o", str(RESULTS / f"MachineMode{i}.fmu")])
+        system.add(f"shaped{i}", RESULTS / f"MachineMode{i}.fmu").connect("shaper.y", f"shaped{i}.position_command")
+        system.add(f"unshaped{i}", RESULTS / f"MachineMode{i}.fmu", parameters={"position_command": 1.0})
+    result = simulate(system, 0.25, 2e-5)
     time = result["time"]
-    unshaped = np.interp(time, moves["time"], moves["u"])
-    shaped = result["y"]
-    after = time > 0.03 + advice.pick.duration
-    for mode in MACHINE:  # the residual of each mode, shaped over unshaped: what "at modes" bounds
-        w = 2 * math.pi * mode.frequency
-        ring = [np.abs(lsim(([w * w], [1, 2 * mode.zeta * w, w * w]), u, time)[1] - u)[after].max()
-                for u in (unshaped, shaped)]
+    after = time > pick.duration
+    for i, mode in enumerate(MACHINE):  # the residual of each mode, shaped over unshaped: what "at modes" bounds
+        ring = [abs(result[f"{k}{i}.position"] - 1.0)[after].max() for k in ("unshaped", "shaped")]
         # Singer and Seering's percent residual compares with the unshaped vibration at the first
         # impulse, which has decayed by exp(-zeta w D) when the shaped one is measured after the last
-        percent = ring[1] / ring[0] * math.exp(-mode.zeta * w * advice.pick.duration)
-        print(f"mode {mode.frequency} Hz: residual of the move after the shaper, shaped / unshaped "
-              f"{100 * ring[1] / ring[0]:.1f} %, as a percent residual {100 * percent:.1f} % "
-              f"(the table's worst case at the modes: {100 * advice.pick.at_modes:.1f} %)")
+        percent = ring[1] / ring[0] * math.exp(-mode.zeta * 2 * math.pi * mode.frequency * pick.duration)
+        print(f"mode {mode.frequency} Hz: residual after the shaper, shaped / unshaped {100 * ring[1] / ring[0]:.1f} %, "
+              f"as a percent residual {100 * percent:.1f} % (the table's worst case at the modes: "
+              f"{100 * pick.at_modes:.1f} %)")
 
+    machine = {k: sum(m.share * result[f"{k}{i}.position"] for i, m in enumerate(MACHINE)) for k in ("unshaped", "shaped")}
     fig, ax = plt.subplots(figsize=(9, 4.5))
-    ax.plot(time, unshaped, "k:", lw=1, label="commanded move")
-    ax.plot(time, machine_response(time, unshaped), label="machine, unshaped")
-    ax.plot(time, machine_response(time, shaped), label=f"machine, shaped by the FMU ({advice.pick.label})")
+    ax.plot(time, result["shaper.y"], "k:", lw=1, label=f"shaped command (FMU, {pick.label})")
+    ax.plot(time, machine["unshaped"], label="machine, unshaped step")
+    ax.plot(time, machine["shaped"], label="machine, shaped step")
     ax.set_xlabel("time (s)")
-    ax.set_ylabel("position")
+    ax.set_ylabel("toolhead position (per unit step)")
+    ax.set_title("co-simulated in shapefmu's master: shaper FMU -> plant FMU of each mode")
     ax.legend()
     ax.grid(alpha=0.3)
     fig.tight_layout()

@@ -124,7 +124,7 @@ def _cmd_recommend(args) -> int:
     if args.json:
         print(json.dumps(advice.to_json(), indent=2))
     else:
-        _print_table(advice)
+        _print_table(advice, len(spectra) if args.recording else 0)
     if args.plot:
         from shapefmu.plots import plot_recommendation
 
@@ -146,8 +146,9 @@ def _merged_modes(per_file):
     return tuple(sorted(merged, key=lambda m: -m.peak))
 
 
-def _print_table(advice) -> None:
-    print(f"shapers judged on Klipper's metrics: vibration = share of the spectrum above max/20 left, worst over "
+def _print_table(advice, recordings: int) -> None:
+    across = f"worst of {recordings} recordings and " if recordings > 1 else ""
+    print(f"shapers judged on Klipper's metrics: vibration = share of the spectrum above max/20 left, {across}worst over "
           f"damping {', '.join(f'{z:g}' for z in advice.dampings)}; smoothing at {advice.accel:g} mm/s^2 and "
           f"{advice.scv:g} mm/s square corner; max accel for smoothing <= {advice.max_smoothing:g} mm")
     print(f"{'shaper':<16} {'frequencies Hz':<16} {'vibration':>9} {'at modes':>8} {'smoothing':>9} "

@@ -42,6 +42,17 @@ def transmissibility(modes, freq) -> np.ndarray:
     return total
 
 
+def plant_model(mode: SyntheticMode, name: str) -> str:
+    """A plant model file (``models/*.toml``, kind transfer_function) of one mode of the machine: the
+    toolhead position per commanded position, T_k(s) (the share left out), for ``shapefmu plant build``."""
+    w = 2 * math.pi * mode.frequency
+    return (f'name = "{name}"\nkind = "transfer_function"\n'
+            f'description = "one mode of a machine, {mode.frequency:g} Hz, zeta {mode.zeta:g}"\n[parameters]\n'
+            f'num = {{ value = [{2 * mode.zeta * w!r}, {w * w!r}], unit = "1" }}\n'
+            f'den = {{ value = [1.0, {2 * mode.zeta * w!r}, {w * w!r}], unit = "1" }}\n'
+            f'[inputs]\nposition_command = {{ unit = "mm" }}\n[outputs]\nposition = {{ unit = "mm" }}\n')
+
+
 def klipper_sweep(fs: float, f_min: float = 5.0, f_max: float = 125.0, hz_per_sec: float = 2.0,
                   accel_per_hz: float = 75.0) -> tuple[np.ndarray, np.ndarray]:
     """(t, commanded acceleration in mm/s^2) of a Klipper resonance test sampled at ``fs``."""
