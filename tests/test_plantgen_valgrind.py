@@ -14,6 +14,8 @@ import zipfile
 
 import pytest
 
+from shapefmu.fmi.native.compile import standard_headers
+
 DRIVER = r"""
 #include <math.h>
 #include <stdarg.h>
@@ -137,7 +139,9 @@ def run_driver_under_valgrind(fmu, driver: str, tmp_path) -> None:
     sources = tmp_path / "sources"
     (tmp_path / "driver.c").write_text(driver)
     program = tmp_path / "driver"
-    subprocess.run(["gcc", "-g", "-O1", "-std=c99", "-I", str(sources), str(tmp_path / "driver.c"),
+    # sources/ leaves the FMI standard's headers out: a tool compiles with its own copy
+    include = standard_headers(tmp_path / "fmi-headers")
+    subprocess.run(["gcc", "-g", "-O1", "-std=c99", "-I", str(sources), "-I", str(include), str(tmp_path / "driver.c"),
                     *map(str, sorted(sources.glob("*.c"))), "-o", str(program), "-lm"], check=True)
     completed = subprocess.run(
         ["valgrind", "--tool=memcheck", "--leak-check=full", "--show-leak-kinds=definite,indirect,possible",

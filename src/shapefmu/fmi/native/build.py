@@ -11,6 +11,7 @@ import tempfile
 import tomllib
 from pathlib import Path
 
+from shapefmu.fmi.documentation import add_documentation
 from shapefmu.fmi.native import description, description3, linear
 from shapefmu.fmi.native.codegen import write_sources
 from shapefmu.fmi.native.compile import LAYER_HEADERS, LAYER_SOURCES, build_binaries, build_description, copy_c_files, zip_fmu
@@ -25,8 +26,7 @@ WRAPPER_SOURCES = (*LAYER_SOURCES, "plant_fmi2.c", "plant_expm.c")
 WRAPPER_HEADERS = (*LAYER_HEADERS, "plant_model.h", "plant_expm.h")
 # The FMI 3.0 target: the same model part and numerics behind an FMI 3.0 wrapper.
 WRAPPER_SOURCES_3 = ("plant_fmi3.c", "plant_fmi3_refused.c", "plant_expm.c", "fmu_liveness.c")
-WRAPPER_HEADERS_3 = ("plant_model.h", "plant_expm.h", "plant_fmi3.h", "fmu_liveness.h", "fmi3Functions.h",
-                     "fmi3FunctionTypes.h", "fmi3PlatformTypes.h")
+WRAPPER_HEADERS_3 = ("plant_model.h", "plant_expm.h", "plant_fmi3.h", "fmu_liveness.h")
 FMI_VERSIONS = ("2.0", "3.0")
 
 
@@ -64,6 +64,19 @@ def to_model_part(model, name: str | None = None) -> ModelPart:
     return linear.model_part(plant, name=name)
 
 
+def _about(part: ModelPart) -> str:
+    """What a plant FMU's documentation says it does (its description comes from the model)."""
+    step = ("the exact zero-order-hold step of the linear system (its matrix exponential), so any "
+            "communication step gives the sampled solution to rounding" if part.linear else
+            f"fixed-substep RK4, the substep being the parameter {part.substep_parameter}")
+    return (f"{part.description or part.name}\n\n"
+            f"A plant model of shapefmu as a native C FMU: {len(part.states)} continuous states, inputs "
+            f"{', '.join(s.name for s in part.inputs) or 'none'}, outputs {', '.join(s.name for s in part.outputs)}. "
+            f"Model Exchange gives the host the state derivatives; Co-Simulation steps with {step}. "
+            f"The inputs are held over a communication step. sources/ holds its C code (the generated model and "
+            f"shapefmu's FMI layer).")
+
+
 def build_plant_fmu(model, out_path, *, name: str | None = None, fmi_version: str = "2.0") -> Path:
     """Generate, compile and zip a plant FMU (Model Exchange + Co-Simulation); returns its path.
 
@@ -97,6 +110,7 @@ def build_plant_fmu(model, out_path, *, name: str | None = None, fmi_version: st
         if note:
             print(note, file=sys.stderr)
         (root / "modelDescription.xml").write_text(describe(part, guid, tuple(c_files)), encoding="utf-8")
+        add_documentation(root, _about(part))
         zip_fmu(root, out_path)
     return out_path
 

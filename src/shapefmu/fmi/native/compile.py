@@ -32,9 +32,13 @@ from pathlib import Path
 
 from shapefmu.fmi.compiler import run_compiler
 
-# The generic FMI 2.0 layer and the FMI headers, shipped in every native FMU.
+# The generic FMI 2.0 layer, shipped in every native FMU's sources/.
 LAYER_SOURCES = ("fmi2_layer.c", "fmi2_layer_state.c", "fmi2_layer_me.c", "fmu_liveness.c")
-LAYER_HEADERS = ("fmi2_model.h", "fmi2_layer.h", "fmu_liveness.h", "fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")
+LAYER_HEADERS = ("fmi2_model.h", "fmi2_layer.h", "fmu_liveness.h")
+# The standard's own headers: compiled against, never shipped in sources/ (the importing tool has
+# them, and the FMI standard asks for them to be left out).
+STANDARD_HEADERS = ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h",
+                    "fmi3Functions.h", "fmi3FunctionTypes.h", "fmi3PlatformTypes.h")
 MINGW = "x86_64-w64-mingw32-gcc"
 
 
@@ -65,7 +69,18 @@ def copy_c_files(sources: Path, names) -> None:
     """Copy package files of ``shapefmu.fmi.native/c`` into ``sources``."""
     package = resources.files("shapefmu.fmi.native") / "c"
     for name in names:
+        if name in STANDARD_HEADERS:
+            raise ValueError(f"{name} is one of the FMI standard's headers, which sources/ leaves out")
         (sources / name).write_bytes((package / name).read_bytes())
+
+
+def standard_headers(folder: Path) -> Path:
+    """``folder`` holding the FMI standard's headers (STANDARD_HEADERS) only, for ``-I``."""
+    folder.mkdir(parents=True, exist_ok=True)
+    package = resources.files("shapefmu.fmi.native") / "c"
+    for name in STANDARD_HEADERS:
+        (folder / name).write_bytes((package / name).read_bytes())
+    return folder
 
 
 def _run(command: list[str], compiler: str, what: str, platform: str) -> None:
@@ -103,28 +118,33 @@ def object_cache() -> Path | None:
     return None
 
 
-def _object(platform: Platform, sources: Path, c_file: str, headers: bytes, what: str, cache: Path) -> Path:
+def _object(platform: Platform, sources: Path, include: Path, c_file: str, headers: bytes, what: str,
+            cache: Path) -> Path:
     """The object file of ``c_file`` in ``cache``, keyed by the compiler, its flags and the bytes of the
-    file and of every header beside it: the generic layer is compiled once, not per FMU."""
+    file and of every header it may include: the generic layer is compiled once, not per FMU."""
     digest = hashlib.sha256(repr((platform.compiler, platform.flags)).encode() + headers)
     digest.update((sources / c_file).read_bytes())
     target = cache / f"{digest.hexdigest()}.o"
     if not target.is_file():
         partial = cache / f"{digest.hexdigest()}.{os.getpid()}.{threading.get_ident()}.partial.o"
         flags = [f for f in platform.flags if f not in ("-shared", "-s")]
-        _run([platform.compiler, *flags, "-c", "-I", str(sources), str(sources / c_file), "-o", str(partial)],
+        _run([platform.compiler, *flags, "-c", "-I", str(sources), "-I", str(include), str(sources / c_file), "-o",
+              str(partial)],
              platform.compiler, what, platform.name)
         os.replace(partial, target)
     return target
 
 
 def compile_binary(platform: Platform, sources: Path, c_files, binary: Path, what: str) -> None:
-    """Compile ``c_files`` (in ``sources``) into the shared library ``binary``."""
+    """Compile ``c_files`` (in ``sources``, with the FMI standard's headers beside) into the shared
+    library ``binary``."""
     binary.parent.mkdir(parents=True, exist_ok=True)
-    headers = b"".join(path.name.encode() + path.read_bytes() for path in sorted(sources.glob("*.h")))
     with tempfile.TemporaryDirectory(prefix="shapefmu-objects-") as scratch:  # where no cache may be used
+        include = standard_headers(Path(scratch) / "fmi-headers")
+        headers = b"".join(path.name.encode() + path.read_bytes()
+                           for path in sorted([*sources.glob("*.h"), *include.glob("*.h")]))
         cache = object_cache() or Path(scratch)
-        objects = [str(_object(platform, sources, f, headers, what, cache)) for f in c_files]
+        objects = [str(_object(platform, sources, include, f, headers, what, cache)) for f in c_files]
         _run([platform.compiler, *platform.flags, *objects, "-o", str(binary), "-lm"], platform.compiler, what,
              platform.name)
 

@@ -30,6 +30,7 @@ import uuid
 from pathlib import Path
 from types import SimpleNamespace
 
+from shapefmu.fmi.documentation import add_documentation
 from shapefmu.fmi.native.compile import LAYER_HEADERS, LAYER_SOURCES, build_binaries, build_description, copy_c_files, zip_fmu
 from shapefmu.fmi.python.builder import designed_slave
 from shapefmu.fmi.python.model_description import model_description
@@ -38,6 +39,9 @@ from shapefmu.fmi.python.slave_base import Variable
 SOURCES = (*LAYER_SOURCES, "sampled_fmi2.c", "sampled_fir.c", "shaper_designs.c")
 HEADERS = (*LAYER_HEADERS, "sampled_model.h", "sampled_fir.h", "shaper_designs.h")
 MODEL_SOURCE = "model.c"
+NATIVE_NOTE = ("This FMU is the native C twin of the pythonfmu FMU of the same name: the same variables and "
+               "sampled semantics, no Python needed. Its design was made at build time and is stored in its "
+               "parameters (impulse_time[i] and impulse_amplitude[i], or tap[i]); sources/ holds its C code.")
 # Kinds the C part re-designs, with their impulses per mode (n = the derivative order of zv_dn).
 CLOSED_FORM = {"zv": lambda n: 2, "zvd": lambda n: 3, "zvdd": lambda n: 4, "zv_dn": lambda n: n + 2, "mzv": lambda n: 3}
 # Bounds on what one FMU declares (each entry is a ScalarVariable of its modelDescription.xml).
@@ -168,6 +172,7 @@ def build_native_fmu(name: str, out_path, **start_values) -> Path:
         xml = model_description(view, guid, dependencies, experiment, "", native_sources=tuple(c_files),
                                 log_categories=_CATEGORIES)
         (root / "modelDescription.xml").write_text(xml, encoding="utf-8")
+        add_documentation(root, f"{sys.modules[type(slave).__module__].__doc__}\n\n{NATIVE_NOTE}")
         zip_fmu(root, out_path)
     return out_path
 

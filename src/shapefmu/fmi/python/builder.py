@@ -45,8 +45,7 @@ SHIM_DIR = PYTHON_FMI_DIR / "shim"
 SHIM_SOURCES = (SHIM_DIR / "fmi2_shim.c", SHIM_DIR / "fmu_states.c", SHIM_DIR / "python_runtime.c")
 # The FMI 2.0 standard headers, shared with the native FMUs.
 FMI_HEADERS_DIR = PYTHON_FMI_DIR.parent / "native" / "c"
-SHIM_FILES = (*SHIM_SOURCES, SHIM_DIR / "fmi2_shim.h", FMI_HEADERS_DIR / "fmi2FunctionTypes.h",
-              FMI_HEADERS_DIR / "fmi2TypesPlatform.h")
+SHIM_FILES = (*SHIM_SOURCES, SHIM_DIR / "fmi2_shim.h")  # the standard's headers left out
 BUILD_FILE = "shapefmu_build.json"
 ENTRY_MODULE = '''"""Entry module of the {name} FMU, imported by pythonfmu's export library."""
 
@@ -207,8 +206,25 @@ def build_fmu(name: str, out_path, **start_values) -> Path:
             fmu.writestr(f"resources/{BUILD_FILE}", json.dumps(build, indent=2))
             for relative, content in files.items():
                 fmu.writestr(f"resources/{package}/{relative}", content)
+            for relative, content in _documentation(xml, name).items():
+                fmu.writestr(relative, content)
         partial.replace(out_path)  # no half-written FMU is ever left under the final name
     return out_path
+
+
+def _documentation(xml: str, name: str) -> dict[str, bytes]:
+    """documentation/index.html, externalDependencies.txt and model.png of the pythonfmu FMU ``name``."""
+    from shapefmu.fmi.documentation import icon_png, index_html
+
+    about = importlib.import_module(f"shapefmu.fmi.python.slaves.{SLAVES[name]}").__doc__
+    libpython = _libpython() or f"libpython3.{sys.version_info.minor} (a shared library)"
+    dependencies = (f"The {name} FMU runs its model in CPython, embedded through pythonfmu's export library.\n"
+                    f"It needs the CPython 3 shared library: built with {libpython}; where that file is missing it looks "
+                    f"for libpython3.{{{','.join(str(m) for m in (sys.version_info.minor, *FALLBACK_MINORS))}}}.so.1.0 on "
+                    f"the library path.\nIt needs no Python package: its code is inside, under resources/.\n")
+    return {"documentation/index.html": index_html(xml.encode(), about, ["linux64"]).encode(),
+            "documentation/externalDependencies.txt": dependencies.encode(),
+            "model.png": icon_png()}
 
 
 def build_all(out_dir) -> list[Path]:
