@@ -1,12 +1,16 @@
-"""Compile and package a native FMU: its C sources into ``binaries/linux64`` and ``binaries/win64``,
-then the FMU archive.
+"""Compile and package a native FMU: its C sources into ``binaries/linux64``, ``binaries/win64``
+and ``binaries/aarch64-linux``, then the FMU archive.
 
 Every native FMU (plants, native shapers) is the one generic FMI 2.0 layer (``c/fmi2_layer*.c``)
 plus a model part. The linux64 binary is compiled with the system C compiler (``$CC``, default
 ``gcc``); the win64 DLL with the mingw-w64 cross compiler (Debian ``gcc-mingw-w64-x86-64``, found
-as ``$MINGW_CC`` or ``x86_64-w64-mingw32-gcc``), so that one ``.fmu`` serves Linux and Windows
-hosts. Where the cross compiler is absent the FMU is built for linux64 only and ``build_binaries``
-says so in the note it returns; its ``sources/`` let any Windows tool compile it later.
+as ``$MINGW_CC`` or ``x86_64-w64-mingw32-gcc``); the library for 64-bit ARM Linux (a Raspberry Pi,
+the boards that run printers) with Debian's ``gcc-aarch64-linux-gnu`` (``$AARCH64_CC`` or
+``aarch64-linux-gnu-gcc``). One ``.fmu`` serves all three. FMI 2.0 names folders for x86 only;
+for any other platform FMI 2.0.4 (section 2.3) asks for FMI 3.0's platform tuple, so the ARM
+library is in ``binaries/aarch64-linux`` in both versions. Where a cross compiler is absent the
+FMU is built without that platform and ``build_binaries`` says so in the note it returns; its
+``sources/`` let any tool compile it later.
 
 Object files are cached by the hash of the compiler, its flags and the sources, so the generic layer
 is compiled once per user rather than once per FMU. An object in the cache is linked into FMUs that
@@ -40,6 +44,7 @@ LAYER_HEADERS = ("fmi2_model.h", "fmi2_layer.h", "fmu_liveness.h")
 STANDARD_HEADERS = ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h",
                     "fmi3Functions.h", "fmi3FunctionTypes.h", "fmi3PlatformTypes.h")
 MINGW = "x86_64-w64-mingw32-gcc"
+AARCH64 = "aarch64-linux-gnu-gcc"
 
 
 @dataclass(frozen=True)
@@ -149,23 +154,35 @@ def compile_binary(platform: Platform, sources: Path, c_files, binary: Path, wha
              platform.name)
 
 
-# binaries/ folder names per FMI version: FMI 2.0 names platforms, FMI 3.0 architecture-os tuples.
-BINARY_FOLDERS = {"2.0": ("linux64", "win64"), "3.0": ("x86_64-linux", "x86_64-windows")}
+def aarch64_linux() -> Platform | None:
+    """The aarch64 Linux cross compiler, or None where it is not installed."""
+    compiler = os.environ.get("AARCH64_CC") or shutil.which(AARCH64)
+    if not compiler:
+        return None
+    return Platform("aarch64-linux", compiler, ("-O2", "-shared", "-fPIC", "-std=c99", "-fvisibility=hidden"), ".so")
+
+
+# binaries/ folder names per FMI version (linux, windows, arm): FMI 2.0's names, else platform tuples.
+BINARY_FOLDERS = {"2.0": ("linux64", "win64", "aarch64-linux"), "3.0": ("x86_64-linux", "x86_64-windows", "aarch64-linux")}
 
 
 def build_binaries(root: Path, identifier: str, c_files, what: str, fmi_version: str = "2.0") -> str:
-    """``root/binaries/<platform>/<identifier>.<so|dll>`` for Linux and, where mingw-w64 is
-    installed, Windows (folders named as ``fmi_version`` names them); returns "" or a note saying
-    the Windows binary was left out and why."""
+    """``root/binaries/<platform>/<identifier>.<so|dll>`` for Linux and, where the cross compilers
+    are installed, Windows and ARM Linux (folders named as ``fmi_version`` names them); returns ""
+    or a note saying which platforms were left out and why."""
     sources = root / "sources"
-    linux_folder, windows_folder = BINARY_FOLDERS[fmi_version]
+    linux_folder, *cross_folders = BINARY_FOLDERS[fmi_version]
     compile_binary(linux64(), sources, c_files, root / "binaries" / linux_folder / f"{identifier}.so", what)
-    windows = win64()
-    if windows is None:
-        return (f"note: {what} FMU built for {linux_folder} only: the mingw-w64 cross compiler ({MINGW}, Debian "
-                f"package gcc-mingw-w64-x86-64) is not installed, so it has no binaries/{windows_folder} "
-                f"(its sources/ are inside)")
-    compile_binary(windows, sources, c_files, root / "binaries" / windows_folder / f"{identifier}.dll", what)
+    missing = []
+    cross = ((win64, MINGW, "gcc-mingw-w64-x86-64"), (aarch64_linux, AARCH64, "gcc-aarch64-linux-gnu"))
+    for folder, (find, command, package) in zip(cross_folders, cross):
+        platform = find()
+        if platform is None:
+            missing.append(f"binaries/{folder} ({command}, Debian package {package}, is not installed)")
+            continue
+        compile_binary(platform, sources, c_files, root / "binaries" / folder / f"{identifier}{platform.suffix}", what)
+    if missing:
+        return f"note: {what} FMU built without {' and '.join(missing)}; its sources/ are inside"
     return ""
 
 
