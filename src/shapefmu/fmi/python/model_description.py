@@ -45,7 +45,7 @@ def model_description(slave, guid, dependencies, experiment, pythonfmu_version, 
             "guid": guid,
             "description": slave.description,
             "generationTool": f"shapefmu {__version__} "
-            + ("native sampled-filter generator" if native_sources is not None
+            + ("native C generator" if native_sources is not None
                else f"(pythonfmu {pythonfmu_version} export library)"),
             "generationDateAndTime": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
             "variableNamingConvention": "structured",

@@ -1,0 +1,87 @@
+"""Package a native C twin of a pythonfmu FMU: the one place that turns a model part into an archive.
+
+A native twin (the Shaper and ShapeFilter of ``sampled``, the EKF tuner of ``ekf_tuner``, ...) is
+the generic FMI 2.0 layer (``c/fmi2_layer*.c``), the model part's own C files and a generated
+``model.c`` (its variables' start values and what was designed at build time). Its
+modelDescription.xml is made from the pythonfmu slave's variables, so an SSP can bind either FMU.
+
+``write_native_fmu`` copies the C files into ``sources/``, derives the GUID from all of them (the
+generated file included, written first without the GUID), writes ``buildDescription.xml``, compiles
+every platform's binary (``compile.build_binaries``), the model description and the documentation,
+and zips the archive.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import sys
+import tempfile
+import uuid
+from pathlib import Path
+from types import SimpleNamespace
+
+from shapefmu.fmi.documentation import add_documentation
+from shapefmu.fmi.native.compile import LAYER_HEADERS, LAYER_SOURCES, build_binaries, build_description, copy_c_files, zip_fmu
+from shapefmu.fmi.python.model_description import model_description
+from shapefmu.fmi.python.slave_base import Variable
+
+MODEL_SOURCE = "model.c"
+TYPE_ORDER = ("Real", "Integer", "Boolean", "String")
+CATEGORIES = (("logStatusError", "Errors: bad parameters, non-finite inputs, calls out of order"),
+              ("logAll", "Everything else (debug logging)"))
+ROLES = {("parameter", "fixed"): "FMI2_PARAMETER_FIXED", ("parameter", "tunable"): "FMI2_PARAMETER_TUNABLE",
+         ("input", "continuous"): "FMI2_INPUT", ("output", "continuous"): "FMI2_COMPUTED"}
+
+
+def number_by_type(variables) -> list[Variable]:
+    """``variables`` renumbered as the generic layer indexes values (fmi2_model.h): Real, Integer,
+    Boolean, String, each in declaration order, value reference = position."""
+    ordered = sorted(variables, key=lambda v: TYPE_ORDER.index(v.type))
+    return [Variable(v.name, vr, v.type, v.causality, v.variability, v.start, v.unit, v.description, v.minimum,
+                     v.maximum) for vr, v in enumerate(ordered)]
+
+
+def c_string(text: str) -> str:
+    """A C string literal of ``text``: printable ASCII without quotes or backslashes only."""
+    if len(text) > 63 or any(not (32 <= ord(c) < 127) or c in '"\\' for c in text):
+        raise ValueError(f"a string parameter must be at most 63 printable ASCII characters without quotes or "
+                         f"backslashes, got {text!r}")
+    return f'"{text}"'
+
+
+def write_native_fmu(name: str, out_path, slave, variables, values: dict, dependencies: dict, c_sources,
+                     c_headers, model_c, about: str, log_categories=CATEGORIES) -> Path:
+    """Write the native FMU ``name`` to ``out_path`` and return the path.
+
+    ``slave`` is the designed pythonfmu slave (its description and DefaultExperiment); ``variables``
+    the numbered variables (``number_by_type``) with their start ``values`` (name -> value);
+    ``dependencies`` maps each output to the inputs it feeds through from; ``c_sources`` and
+    ``c_headers`` the model part's files of ``fmi/native/c`` (the generic layer is added here);
+    ``model_c(guid)`` the text of the generated model.c; ``about`` the documentation's account of
+    what the FMU does.
+    """
+    out_path = Path(out_path)
+    sources_list = (*LAYER_SOURCES, *c_sources)
+    with tempfile.TemporaryDirectory(prefix="shapefmu_native_") as tmp:
+        root = Path(tmp)
+        sources = root / "sources"
+        sources.mkdir()
+        copy_c_files(sources, sources_list + (*LAYER_HEADERS, *c_headers))
+        c_files = [*sources_list, MODEL_SOURCE]
+        digest = hashlib.md5(model_c("").encode())
+        for file in sorted(p.name for p in sources.iterdir()):
+            digest.update((sources / file).read_bytes())
+        guid = "{" + str(uuid.UUID(digest.hexdigest())) + "}"
+        (sources / MODEL_SOURCE).write_text(model_c(guid), encoding="utf-8")
+        (sources / "buildDescription.xml").write_text(build_description(name, c_files), encoding="utf-8")
+        note = build_binaries(root, name, c_files, f"native {name}")
+        if note:
+            print(note, file=sys.stderr)
+        view = SimpleNamespace(model_name=name, variables=variables, values=values,
+                               description=f"{slave.description} (native C, designed at build time)")
+        xml = model_description(view, guid, dependencies, slave.experiment(), "", native_sources=tuple(c_files),
+                                log_categories=log_categories)
+        (root / "modelDescription.xml").write_text(xml, encoding="utf-8")
+        add_documentation(root, about)
+        zip_fmu(root, out_path)
+    return out_path
