@@ -12,8 +12,10 @@
 #ifndef SAMPLE_CLOCK_H
 #define SAMPLE_CLOCK_H
 
-#include "sampled_fir.h" /* SAMPLE_TOLERANCE, MAX_SAMPLES_PER_STEP */
-
+/* A sample instant s_k counts as reached at tau when s_k <= tau + SAMPLE_TOLERANCE * Ts. */
+#define SAMPLE_TOLERANCE 1e-6
+/* A communication step may span at most this many samples (else fmi2Error, no state change). */
+#define MAX_SAMPLES_PER_STEP 10000000LL
 #define CLOCK_MAX_INPUTS 4
 
 typedef struct {

@@ -11,10 +11,7 @@
 
 #include <stddef.h>
 
-/* A sample instant s_k counts as reached at tau when s_k <= tau + SAMPLE_TOLERANCE * Ts. */
-#define SAMPLE_TOLERANCE 1e-6
-/* A communication step may span at most this many samples (else fmi2Error, no state change). */
-#define MAX_SAMPLES_PER_STEP 10000000LL
+#include "sample_clock.h" /* SAMPLE_TOLERANCE, MAX_SAMPLES_PER_STEP */
 /* The delay line holds at most this many samples (the longest delay of a design, in samples). */
 #define MAX_DELAY_SAMPLES 10000000L
 
