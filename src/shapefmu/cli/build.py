@@ -4,8 +4,10 @@
     shapefmu build shaper --kind simultaneous --mode 2000:0.01 --mode 3000:0.01 [--ts S] -o fmus/DiskDriveShaper.fmu
     shapefmu build reference solution.json [--interpolation hold|linear] -o fmus/TimeOptimal.fmu
     shapefmu build shape-filter --kind hanning --mode 10:0.05 --order 2 [--ts S] -o fmus/HanningFilter.fmu
-    shapefmu build shaper --native ...; shapefmu build shape-filter --native ...: the same FMU in C
-        (no Python on the host; linux64 and win64 binaries; shapefmu.fmi.native.sampled)
+    shapefmu build ekf-tuner [--kind zvd] [--omega0 RAD_S] [--ts S] [--amplitude A] [--retune-fraction F] -o ...
+    shapefmu build shaper --native ...; shape-filter --native; ekf-tuner --native; build --native (every
+        FMU that has one): the native C twin (no Python on the host; linux64, win64 and aarch64-linux
+        binaries; shapefmu.fmi.native.twins)
 
 Targets are registered in ``TARGETS``: a name -> (help, add_arguments(parser), build(args) -> [paths]).
 Another target (e.g. ``reference solution.json -o fmus/TimeOptimal.fmu``) is one more entry.
@@ -24,6 +26,8 @@ from shapefmu.shapers.catalog import check_sampling
 
 def _add_all(parser):
     parser.add_argument("-o", "--out", default="fmus", type=output_folder, help="output directory (default fmus/)")
+    parser.add_argument("--native", action="store_true",
+                        help="the native C twin of every FMU that has one (same names), besides the plants")
     parser.add_argument("--models", help="folder of plant models to build as native FMUs "
                         "(default: the papers' models that ship with shapefmu, see shapefmu plant list)")
 
@@ -31,20 +35,24 @@ def _add_all(parser):
 def _build_all(args):
     from shapefmu.fmi.native import build_all as build_all_plants
 
+    if args.native:
+        from shapefmu.fmi.native.twins import build_all_native
+
+        return [*build_all_native(args.out), *build_all_plants(args.models, args.out)]
     return [*build_all(args.out), *build_all_plants(args.models, args.out)]
 
 
 def _add_native(parser):
-    parser.add_argument("--native", action="store_true",
-                        help="a native C FMU (no Python on the host, linux64 + win64), designed at build time")
+    parser.add_argument("--native", action="store_true", help="the native C twin (no Python on the host; linux64, "
+                        "win64 and aarch64-linux binaries), designed at build time")
 
 
 def _builder(args):
-    """The pythonfmu builder, or the native one for --native."""
+    """The pythonfmu builder, or the native twin's for --native."""
     if args.native:
-        from shapefmu.fmi.native.sampled import build_native_fmu
+        from shapefmu.fmi.native.twins import build_native
 
-        return build_native_fmu
+        return build_native
     return build_fmu
 
 
@@ -123,11 +131,34 @@ def _build_shape_filter(args):
     return [_builder(args)("ShapeFilter", Path(args.out), **starts)]
 
 
+def _add_ekf_tuner(parser):
+    from shapefmu.runtime.ekf_tuner import KINDS as TUNER_KINDS
+
+    _add_native(parser)
+    parser.add_argument("--kind", choices=TUNER_KINDS, default="zvd", help="shaper designed for the estimate (default zvd)")
+    parser.add_argument("--n", type=int, help="derivative order of zv_dn (default 1)")
+    parser.add_argument("--omega0", type=float, help="first guess of the vibration's frequency, rad/s (default 2 pi 10)")
+    parser.add_argument("--ts", type=float, help="sampling period of the EKF and the shaper, s (default 1e-3)")
+    parser.add_argument("--amplitude", type=float, help="scale of the vibration signal (default 1)")
+    parser.add_argument("--retune-fraction", type=float, help="re-design when the estimate moves by more (default 0.05)")
+    parser.add_argument("-o", "--out", default="fmus/EKFTuner.fmu", type=output_file(".fmu", what="FMU"),
+                        help="FMU file (default fmus/EKFTuner.fmu)")
+
+
+def _build_ekf_tuner(args):
+    given = {"kind": args.kind, "n": args.n, "omega0": args.omega0, "Ts": args.ts, "amplitude": args.amplitude,
+             "retune_fraction": args.retune_fraction}
+    starts = {name: value for name, value in given.items() if value is not None}
+    return [_builder(args)("EKFTuner", Path(args.out), **starts)]
+
+
 TARGETS = {
     "all": ("every FMU with its default parameters", _add_all, _build_all),
     "shaper": ("the Shaper FMU with a design baked in", _add_shaper, _build_shaper),
     "reference": ("the ReferencePlayer FMU playing a signal table", _add_reference, _build_reference),
     "shape-filter": ("the ShapeFilter FMU with a sampled design baked in", _add_shape_filter, _build_shape_filter),
+    "ekf-tuner": ("the EKFTuner FMU (paper 001): estimates the vibration's mode, shapes for it", _add_ekf_tuner,
+                  _build_ekf_tuner),
 }
 
 

@@ -130,3 +130,13 @@ def build_native_fmu(name: str, out_path, **start_values) -> Path:
     return write_native_fmu(name, out_path, slave, numbered, values, dependencies, SOURCES, HEADERS,
                             lambda guid: _model_c(slave, numbered, values, guid, capacity, closed, feedthrough), about)
 
+
+
+def build_native_shaper(out_path, **start_values) -> Path:
+    """The native Shaper FMU (``build_native_fmu("Shaper", ...)``)."""
+    return build_native_fmu("Shaper", out_path, **start_values)
+
+
+def build_native_shape_filter(out_path, **start_values) -> Path:
+    """The native ShapeFilter FMU (``build_native_fmu("ShapeFilter", ...)``)."""
+    return build_native_fmu("ShapeFilter", out_path, **start_values)

@@ -1,0 +1,33 @@
+"""The native C twins of the pythonfmu FMUs, by the model name they share: one registry for
+``shapefmu build <target> --native``, ``shapefmu build --native`` (every twin) and
+``shapefmu compare --native``.
+
+A twin has the pythonfmu FMU's variables, units, start values and sampled semantics, so an SSP may
+bind either; ``build_native(name, out_path, **start_values)`` builds one.
+"""
+
+from __future__ import annotations
+
+import importlib
+from pathlib import Path
+
+# model name -> (module, builder(out_path, **start_values) -> Path)
+TWINS = {
+    "Shaper": ("shapefmu.fmi.native.sampled", "build_native_shaper"),
+    "ShapeFilter": ("shapefmu.fmi.native.sampled", "build_native_shape_filter"),
+    "EKFTuner": ("shapefmu.fmi.native.ekf_tuner", "build_native_ekf_tuner"),
+}
+
+
+def build_native(name: str, out_path, **start_values) -> Path:
+    """The native twin of the pythonfmu FMU ``name`` with ``start_values``, written to ``out_path``."""
+    if name not in TWINS:
+        raise ValueError(f"name must be one of {', '.join(TWINS)} (the FMUs with a native C twin), got {name!r}")
+    module, builder = TWINS[name]
+    return getattr(importlib.import_module(module), builder)(out_path, **start_values)
+
+
+def build_all_native(out_dir) -> list[Path]:
+    """Every native twin with its default start values into ``out_dir``, named as the pythonfmu FMUs."""
+    out_dir = Path(out_dir)
+    return [build_native(name, out_dir / f"{name}.fmu") for name in TWINS]
