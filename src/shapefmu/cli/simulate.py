@@ -165,7 +165,7 @@ def _cmd_compare(args) -> int:
         raise ValueError("--target applies to --write-ssp FILE, which is not given")
     comparison = compare(args.file, args.distance, candidates=args.candidate or None, step=args.step, cache=args.fmus,
                          u_max=args.u_max, tolerance=args.tolerance, plot=args.plot, write_ssp=args.write_ssp,
-                         target=args.target)
+                         target=args.target, native=args.native)
     print(comparison.table())
     if args.plot:
         print(f"plot written to {args.plot}")
@@ -214,6 +214,8 @@ def register(commands) -> None:
                    help="folder where the FMUs are built and reused (default fmus)")
     p.add_argument("--u-max", type=float, default=None, help="input limit (default: the input's limit in the file)")
     p.add_argument("--tolerance", type=float, default=1e-3, help="settling band of the move time, relative to X and U")
+    p.add_argument("--native", action="store_true", help="run every command FMU as its native C twin (no Python in the "
+                   "loop; built into FMUS/native/ with each system's parameters baked in)")
     p.add_argument("--plot", metavar="PNG", type=output_file("plot"),
                    help="save u, position error and deflection of every candidate")
     _add_write_ssp(p, fold=False)

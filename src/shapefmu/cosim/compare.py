@@ -120,11 +120,15 @@ def _linear_symbolic_plant(**fields):
 class FMUCache:
     """A folder of FMUs built on demand: the slaves with default start values (parameters are bound
     per system) and measured plants. A file is rebuilt when its fingerprint (the slave's bundled
-    sources, or the plant's matrices) differs from the one recorded in ``fingerprints.json``."""
+    sources, or the plant's matrices) differs from the one recorded in ``fingerprints.json``.
+    With ``native`` the slaves are their native C twins (``shapefmu.fmi.native.twins``), in the
+    subfolder ``native/``."""
 
-    def __init__(self, directory):
+    def __init__(self, directory, native: bool = False):
+        self.native = native
         self.directory = Path(directory)
         self.directory.mkdir(parents=True, exist_ok=True)
+        self._names: dict[Path, str] = {}  # slave FMU -> the model it is
         self._stamps_path = self.directory / "fingerprints.json"
         try:
             self._stamps = json.loads(self._stamps_path.read_text())
@@ -134,6 +138,7 @@ class FMUCache:
     def _cached(self, file_name: str, fingerprint: str, build) -> Path:
         path = self.directory / file_name
         if not (path.is_file() and self._stamps.get(file_name) == fingerprint):
+            path.parent.mkdir(exist_ok=True)
             build(path)
             self._stamps[file_name] = fingerprint
             self._stamps_path.write_text(json.dumps(self._stamps, indent=1, sort_keys=True))
@@ -145,12 +150,25 @@ class FMUCache:
         from shapefmu.fmi.python.builder import build_fmu, bundled_sources, package_name
 
         fingerprint = package_name(bundled_sources(name))
+        build = build_fmu
         file_name = f"{name}.fmu"
+        if self.native:
+            from shapefmu.fmi.native.twins import build_native, fingerprint as native_fingerprint
+
+            fingerprint += native_fingerprint(name)
+            build = build_native
+            file_name = f"native/{name}.fmu"
         if start_values:
             baked = json.dumps(start_values, sort_keys=True)
-            file_name = f"{name}_{hashlib.sha256(baked.encode()).hexdigest()[:12]}.fmu"
+            file_name = file_name.replace(".fmu", f"_{hashlib.sha256(baked.encode()).hexdigest()[:12]}.fmu")
             fingerprint += baked
-        return self._cached(file_name, fingerprint, lambda path: build_fmu(name, path, **start_values))
+        path = self._cached(file_name, fingerprint, lambda path: build(name, path, **start_values))
+        self._names[path] = name
+        return path
+
+    def model_of(self, fmu: Path) -> str | None:
+        """The model name of a slave FMU this cache built, None for any other FMU (a plant)."""
+        return self._names.get(fmu)
 
     def plant(self, plant) -> Path:
         """The measured plant FMU (``measured_plant``) of a Plant or model file, e.g. DiskDriveMeasured.fmu."""
@@ -263,7 +281,7 @@ def _modes_hz(plant) -> dict:
 
 def compare(plant_model, distance: float, candidates=CANDIDATES, step: float = 1e-6, *, cache="fmus",
             u_max: float | None = None, tolerance: float = 1e-3, stop_time: float | None = None,
-            plot=None, write_ssp=None, target: str | None = None) -> Comparison:
+            plot=None, write_ssp=None, target: str | None = None, native: bool = False) -> Comparison:
     """Run the plant with each candidate command as an SSP system of FMUs; see the module docstring.
 
     ``plant_model``: a model file or Plant of paper 002's eq. (1) form (a rigid body and 1-4 modes).
@@ -274,7 +292,9 @@ def compare(plant_model, distance: float, candidates=CANDIDATES, step: float = 1
     the deflections of every candidate. ``write_ssp``: a path ``dir/name.ssp`` (or ``.ssd``); each
     candidate's system, with its experiment, is written to ``dir/name_<candidate>.ssp`` for
     ``target`` (None, "libcosim" or "omsimulator", with the macro step ``step``; see
-    :func:`shapefmu.fmi.ssp.write_system`), and ``Comparison.written`` lists the files.
+    :func:`shapefmu.fmi.ssp.write_system`), and ``Comparison.written`` lists the files. ``native``:
+    every slave is its native C twin, built with the system's parameters baked in (a twin designs
+    at build time).
     """
     from shapefmu.cosim.master import Master
     from shapefmu.fmi.ssp import System, write_system
@@ -300,7 +320,7 @@ def compare(plant_model, distance: float, candidates=CANDIDATES, step: float = 1
     u_max = check_positive(u_max, "u_max")
     modes = _modes_hz(plant)
     window = 2.0 * math.pi / min(omega for omega, _ in plant.flexible_modes())
-    fmus = FMUCache(cache)
+    fmus = FMUCache(cache, native=native)
     plant_fmu = fmus.plant(plant)
     rigid = rigid_bang_bang(plant, distance, u_max)
     optimal = time_optimal(plant, distance, u_max)
@@ -337,11 +357,13 @@ def compare(plant_model, distance: float, candidates=CANDIDATES, step: float = 1
             start, both = _ekf_tuned_moves(rigid, window, step)
             sys_ = _ekf_tuned_system(system(name), fmus, both, distance, step, modes, command)
             extra = ("tuner.omega_est", "tuner.zeta_est", "tuner.converged")
+        if native:
+            sys_ = _baked_in(sys_, fmus, strings_only=False)
         results = run_system(sys_, start, extra)
         if write_ssp is not None:
             path = Path(write_ssp)
             if target == "omsimulator":
-                sys_ = _strings_baked_in(sys_, fmus)
+                sys_ = _baked_in(sys_, fmus, strings_only=True)
             written.append(write_system(sys_.for_experiment(start + stop_time), path.with_stem(f"{path.stem}_{name.replace('-', '_')}"),
                                         target, step if target else None))
         if start > 0.0:
@@ -349,7 +371,7 @@ def compare(plant_model, distance: float, candidates=CANDIDATES, step: float = 1
             # (that move alone through the same tuner, which passes it unshaped and one step late
             # before it converges), so that the measured move is judged by its own vibration.
             alone = _ekf_tuned_system(system("identification"), fmus, rigid, distance, step, modes, command)
-            first = run_system(alone, start)
+            first = run_system(_baked_in(alone, fmus, strings_only=False) if native else alone, start)
             for output in outputs:
                 results[output] -= first[output]
         runs.append((name, results, start))
@@ -373,19 +395,24 @@ def compare(plant_model, distance: float, candidates=CANDIDATES, step: float = 1
     return comparison
 
 
-def _strings_baked_in(system, fmus: FMUCache):
-    """``system`` with each slave's String bindings baked into a copy of its FMU as start values:
-    OMSimulator imports no String binding (see :mod:`shapefmu.fmi.ssp_targets`)."""
+def _baked_in(system, fmus: FMUCache, strings_only: bool):
+    """``system`` with each slave's bindings baked into a copy of its FMU as start values: the
+    String ones, removed from the bindings, for OMSimulator, which imports no String binding (see
+    :mod:`shapefmu.fmi.ssp_targets`); every one, the bindings kept, for a native twin, which
+    designs at build time and refuses another value than its build value."""
     result = copy.copy(system)
     result.components = {}
     for name, component in system.components.items():
-        strings = {k: v for k, v in component.parameters.items() if component.connectors[k].type == "String"}
-        if strings:
+        baked = {k: v for k, v in component.parameters.items()
+                 if not strings_only or component.connectors[k].type == "String"}
+        model = fmus.model_of(component.fmu)
+        if baked and model is not None:
             component = copy.copy(component)
-            component.fmu = fmus.slave(component.fmu.stem, **strings)
-            component.parameters = {k: v for k, v in component.parameters.items() if k not in strings}
-            component.connectors = {k: dataclasses.replace(c, start=strings[k]) if k in strings else c
+            component.fmu = fmus.slave(model, **baked)
+            component.connectors = {k: dataclasses.replace(c, start=baked[k]) if k in baked else c
                                     for k, c in component.connectors.items()}
+            if strings_only:
+                component.parameters = {k: v for k, v in component.parameters.items() if k not in baked}
         result.components[name] = component
     return result
 

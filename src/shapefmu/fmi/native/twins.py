@@ -8,7 +8,9 @@ bind either; ``build_native(name, out_path, **start_values)`` builds one.
 
 from __future__ import annotations
 
+import hashlib
 import importlib
+from importlib import resources
 from pathlib import Path
 
 # model name -> (module, builder(out_path, **start_values) -> Path)
@@ -31,3 +33,14 @@ def build_all_native(out_dir) -> list[Path]:
     """Every native twin with its default start values into ``out_dir``, named as the pythonfmu FMUs."""
     out_dir = Path(out_dir)
     return [build_native(name, out_dir / f"{name}.fmu") for name in TWINS]
+
+
+def fingerprint(name: str) -> str:
+    """A digest of what the twin ``name`` is built from (its builder module and the C files), so a
+    cache of built twins knows when to rebuild."""
+    module, _ = TWINS[name]
+    digest = hashlib.sha256(Path(importlib.import_module(module).__file__).read_bytes())
+    folder = resources.files("shapefmu.fmi.native") / "c"
+    for path in sorted(folder.iterdir(), key=lambda p: p.name):
+        digest.update(path.name.encode() + path.read_bytes())
+    return digest.hexdigest()[:16]
