@@ -40,9 +40,16 @@
 typedef struct {
     double x[4], P[4][4];
     double p0[4], q[4], r, omega_tol, sigma_tol, nis_limit, nis, fs, dt, good[4];
-    long long window, count, head;  /* the last `window` (omega, sigma): a ring of `count` entries */
-    long long samples, missing, resets, reacquisitions, reset_last;
+    long long window, count, slot;  /* the last `count` <= window estimates, the next one goes to slot */
+    long long samples, missing, resets, reacquisitions, reset_last, converged;
 } Ekf;
+
+/* A queue of window slots in a circular buffer of `window` entries. */
+typedef struct {
+    long long size, front;
+} Queue;
+
+enum { HIGH_OMEGA, LOW_OMEGA, HIGH_SIGMA, LOW_SIGMA, QUEUES };
 
 typedef struct {
     long long length, pos;  /* taps[0..length), line[0..2 length): u[k - d] = line[pos + d] */
@@ -51,7 +58,13 @@ typedef struct {
 
 typedef struct {
     Ekf ekf;
+    /* The window of estimates (omega, sigma), a ring (recent[2 slot], recent[2 slot + 1]), and for
+     * each extreme a monotonic queue of the slots, oldest first, that may still be it:
+     * runtime/ekf.py scans its deque for max - min every sample, these give the same values in
+     * O(1) per sample. */
     double *recent;          /* 2 * window */
+    long long *queued;       /* QUEUES * window */
+    Queue queue[QUEUES];
     Streaming active, pending;
     /* the tuner's scalars (saved as they are in an FMU state) */
     long long started, has_active, has_pending, has_design, has_last, designs, rest;
@@ -149,7 +162,64 @@ static int ekf_healthy(const Ekf *e) {
     return 0.0 < e->x[2] && e->x[2] < PI * e->fs;
 }
 
-static void ekf_step(Ekf *e, double *recent, double z) {
+static double omega_n(const Ekf *e) { return hypot(e->x[2], e->x[3]); }
+static double zeta_of(const Ekf *e) { return e->x[3] / hypot(e->x[2], e->x[3]); }
+
+static double estimate(const Tuner *t, long long slot, int which) {
+    return t->recent[2 * slot + (which >= HIGH_SIGMA)];
+}
+
+static void window_clear(Tuner *t) {
+    t->ekf.count = 0;
+    memset(t->queue, 0, sizeof t->queue);
+}
+
+static long long wrapped(long long i, long long w) { return i >= w ? i - w : i; }
+
+/* Append the estimate (omega, sigma) at the next slot; in a full window it replaces the oldest,
+ * which leaves every queue it is still at the front of. */
+static void window_push(Tuner *t, double omega, double sigma) {
+    Ekf *e = &t->ekf;
+    const long long w = e->window, slot = e->slot;
+    const int full = e->count == w;
+    t->recent[2 * slot] = omega;
+    t->recent[2 * slot + 1] = sigma;
+    for (int k = 0; k < QUEUES; k++) {
+        Queue *queue = &t->queue[k];
+        long long *at = t->queued + k * w;
+        if (full && queue->size > 0 && at[queue->front] == slot) queue->front = wrapped(queue->front + 1, w), queue->size--;
+        const double value = k < HIGH_SIGMA ? omega : sigma;
+        const int high = k == HIGH_OMEGA || k == HIGH_SIGMA;
+        while (queue->size > 0) {
+            const double back = estimate(t, at[wrapped(queue->front + queue->size - 1, w)], k);
+            if (high ? back <= value : back >= value) queue->size--;
+            else break;
+        }
+        at[wrapped(queue->front + queue->size, w)] = slot;
+        queue->size++;
+    }
+    e->slot = wrapped(slot + 1, w);
+    if (!full) e->count++;
+}
+
+static double extreme(const Tuner *t, int which) {
+    return estimate(t, t->queued[which * t->ekf.window + t->queue[which].front], which);
+}
+
+/* Covariance of omega and sigma small and both estimates stable over the last window. */
+static int ekf_converged(const Tuner *t) {
+    const Ekf *e = &t->ekf;
+    const double omega = e->x[2];
+    const double omega_std = sqrt(e->P[2][2] > 0.0 ? e->P[2][2] : 0.0);
+    const double sigma_std = sqrt(e->P[3][3] > 0.0 ? e->P[3][3] : 0.0);
+    if (omega_std > e->omega_tol * omega || sigma_std > e->sigma_tol * omega) return 0;
+    if (e->count < e->window) return 0;
+    return extreme(t, HIGH_OMEGA) - extreme(t, LOW_OMEGA) <= e->omega_tol * omega
+           && extreme(t, HIGH_SIGMA) - extreme(t, LOW_SIGMA) <= e->sigma_tol * omega;
+}
+
+static void ekf_step(Tuner *t, double z) {
+    Ekf *e = &t->ekf;
     e->samples++;
     ekf_predict(e);
     if (isfinite(z)) ekf_update(e, z);
@@ -159,38 +229,18 @@ static void ekf_step(Ekf *e, double *recent, double z) {
         e->resets++;
         memcpy(e->x, e->good, sizeof e->x);
         diagonal(e->P, e->p0);
-        e->count = e->head = 0;
-        return;
+        window_clear(t);
+    } else {
+        if (e->nis > e->nis_limit) {
+            e->reacquisitions++;
+            diagonal(e->P, e->p0);
+            e->nis = 1.0;
+            window_clear(t);
+        }
+        memcpy(e->good, e->x, sizeof e->x);
+        window_push(t, e->x[2], e->x[3]);
     }
-    if (e->nis > e->nis_limit) {
-        e->reacquisitions++;
-        diagonal(e->P, e->p0);
-        e->nis = 1.0;
-        e->count = e->head = 0;
-    }
-    memcpy(e->good, e->x, sizeof e->x);
-    recent[2 * e->head] = e->x[2];
-    recent[2 * e->head + 1] = e->x[3];
-    e->head = (e->head + 1) % e->window;
-    if (e->count < e->window) e->count++;
-}
-
-static double omega_n(const Ekf *e) { return hypot(e->x[2], e->x[3]); }
-static double zeta_of(const Ekf *e) { return e->x[3] / hypot(e->x[2], e->x[3]); }
-
-static int ekf_converged(const Ekf *e, const double *recent) {
-    const double omega = e->x[2];
-    const double omega_std = sqrt(e->P[2][2] > 0.0 ? e->P[2][2] : 0.0);
-    const double sigma_std = sqrt(e->P[3][3] > 0.0 ? e->P[3][3] : 0.0);
-    if (omega_std > e->omega_tol * omega || sigma_std > e->sigma_tol * omega) return 0;
-    if (e->count < e->window) return 0;
-    double w_low = recent[0], w_high = recent[0], s_low = recent[1], s_high = recent[1];
-    for (long long i = 1; i < e->count; i++) {
-        const double w = recent[2 * i], s = recent[2 * i + 1];
-        w_low = w < w_low ? w : w_low, w_high = w > w_high ? w : w_high;
-        s_low = s < s_low ? s : s_low, s_high = s > s_high ? s : s_high;
-    }
-    return w_high - w_low <= e->omega_tol * omega && s_high - s_low <= e->sigma_tol * omega;
+    e->converged = ekf_converged(t);
 }
 
 /* ---------------------------------------------------------------- the shaper (runtime/shaper_filter.py) */
@@ -258,8 +308,8 @@ static double streaming_step(Streaming *f, double u) {
 
 static void observe(Tuner *t, double measurement) {
     Ekf *e = &t->ekf;
-    ekf_step(e, t->recent, measurement);
-    if (!ekf_converged(e, t->recent)) return;
+    ekf_step(t, measurement);
+    if (!e->converged) return;
     const double omega = omega_n(e), zeta = zeta_of(e);
     if (!(0.0 <= zeta && zeta < 1.0)) return;  /* a growing or over-damped "mode" is no design point */
     if (t->has_design) {
@@ -307,9 +357,10 @@ static void commit(void *context, const double *inputs) {
 
 static void publish_estimates(Fmi2Instance *inst) {
     const Tuner *t = tuner_of(inst);
-    inst->reals[t->vr[EKF_OMEGA_EST]] = omega_n(&t->ekf);
-    inst->reals[t->vr[EKF_ZETA_EST]] = zeta_of(&t->ekf);
-    inst->reals[t->vr[EKF_CONVERGED]] = ekf_converged(&t->ekf, t->recent) ? 1.0 : 0.0;
+    const double natural = omega_n(&t->ekf);  /* hypot once: zeta_of's is the same value */
+    inst->reals[t->vr[EKF_OMEGA_EST]] = natural;
+    inst->reals[t->vr[EKF_ZETA_EST]] = t->ekf.x[3] / natural;
+    inst->reals[t->vr[EKF_CONVERGED]] = t->ekf.converged ? 1.0 : 0.0;
 }
 
 /* ---------------------------------------------------------------- FMI hooks: life cycle */
@@ -335,7 +386,9 @@ static void release_run(Fmi2Instance *inst) {
     streaming_free(inst, &t->active);
     streaming_free(inst, &t->pending);
     fmi2_release(inst, t->recent);
+    fmi2_release(inst, t->queued);
     t->recent = NULL;
+    t->queued = NULL;
     t->started = t->has_active = t->has_pending = t->has_design = t->has_last = 0;
 }
 
@@ -389,7 +442,10 @@ fmi2Status model_exit_initialization(Fmi2Instance *inst) {
     ekf_start(&t->ekf, fs, omega0, real_of(inst, EKF_AMPLITUDE), window < 2.0 ? 2 : (long long)window);
     t->h = 1.0 / t->ekf.fs;
     t->recent = fmi2_allocate(inst, 2 * (size_t)t->ekf.window, sizeof(double));
-    if (t->recent == NULL) return fmi2_fail(inst, "%s: out of memory for a window of %lld samples", function, t->ekf.window);
+    t->queued = fmi2_allocate(inst, QUEUES * (size_t)t->ekf.window, sizeof(long long));
+    if (t->recent == NULL || t->queued == NULL)
+        return fmi2_fail(inst, "%s: out of memory for a window of %lld samples", function, t->ekf.window);
+    window_clear(t);
     clock_start(&t->clock, inst->start_time, ts);
     t->failure = NULL;
     t->started = 1;
@@ -405,12 +461,12 @@ fmi2Status model_update(Fmi2Instance *inst, const char *function) {
 
 fmi2Status model_do_step(Fmi2Instance *inst, double t_now, double h) {
     Tuner *t = tuner_of(inst);
-    const double samples = clock_samples_in_step(&t->clock, t_now, h);
+    const double reached = clock_reached(&t->clock, t_now + h), samples = reached - (double)t->clock.k;
     if (samples > (double)MAX_SAMPLES_PER_STEP)
         return fmi2_fail(inst, "fmi2DoStep: communication step h = %g s spans %.0f samples of Ts = %g s; at most %lld "
                          "per step", h, samples, t->clock.ts, MAX_SAMPLES_PER_STEP);
     const double inputs[2] = {real_of(inst, EKF_COMMAND), real_of(inst, EKF_VIBRATION)};
-    clock_step(&t->clock, t_now + h, inputs, 2, commit, t);
+    clock_step_to(&t->clock, t_now + h, reached, inputs, 2, commit, t);
     if (t->failure != NULL) return fmi2_fail(inst, "fmi2DoStep: at t = %g s: %s", t_now, t->failure);
     publish_estimates(inst);
     return fmi2OK;
@@ -535,14 +591,18 @@ int model_restore_state(Fmi2Instance *inst, const unsigned char *bytes, size_t s
     release_run(inst);
     if (!header.started) return size == sizeof header ? 0 : -1;
     const long long window = header.ekf.window;
-    if (window < 2 || window > MAX_WINDOW || header.ekf.count < 0 || header.ekf.count > window || header.ekf.head < 0
-        || header.ekf.head >= window || header.kind < 0 || header.kind >= KIND_NOT_CLOSED_FORM || header.order < 0
+    if (window < 2 || window > MAX_WINDOW || header.ekf.count < 0 || header.ekf.count > window
+        || header.ekf.slot < 0 || header.ekf.slot >= window || (header.ekf.converged != 0 && header.ekf.converged != 1) || header.kind < 0 || header.kind >= KIND_NOT_CLOSED_FORM || header.order < 0
         || header.order > MAX_ORDER || !(header.clock.ts > 0.0) || !(header.h > 0.0))
         return -1;
     const unsigned char *at = bytes + sizeof header, *end = bytes + size;
     if ((size_t)(end - at) < 2 * (size_t)window * sizeof(double)) return -1;
     t->recent = fmi2_allocate(inst, 2 * (size_t)window, sizeof(double));
-    if (t->recent == NULL) return -1;
+    t->queued = fmi2_allocate(inst, QUEUES * (size_t)window, sizeof(long long));
+    if (t->recent == NULL || t->queued == NULL) {
+        release_run(inst);
+        return -1;
+    }
     memcpy(t->recent, at, 2 * (size_t)window * sizeof(double));
     at += 2 * (size_t)window * sizeof(double);
     if (take_streaming(t, &t->active, header.active_length, header.active_pos, &at, end) != 0
@@ -552,6 +612,14 @@ int model_restore_state(Fmi2Instance *inst, const unsigned char *bytes, size_t s
         return -1;
     }
     t->ekf = header.ekf, t->clock = header.clock;
+    /* the queues from the window's estimates, pushed again oldest first */
+    const long long count = t->ekf.count;
+    window_clear(t);
+    t->ekf.slot = wrapped(t->ekf.slot + window - count, window);
+    for (long long j = 0; j < count; j++) {
+        const long long slot = t->ekf.slot;
+        window_push(t, t->recent[2 * slot], t->recent[2 * slot + 1]);
+    }
     t->has_active = header.has_active, t->has_pending = header.has_pending, t->has_design = header.has_design;
     t->has_last = header.has_last, t->designs = header.designs, t->rest = header.rest;
     t->design_omega = header.design_omega, t->design_zeta = header.design_zeta, t->last_command = header.last_command;

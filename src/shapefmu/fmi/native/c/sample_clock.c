@@ -24,13 +24,20 @@ void clock_start(SampleClock *clock, double t0, double ts) {
     clock->ts = ts;
 }
 
+double clock_reached(const SampleClock *clock, double end) { return newest(clock, end); }
+
 double clock_samples_in_step(const SampleClock *clock, double t, double h) {
     return newest(clock, t + h) - (double)clock->k;
 }
 
 void clock_step(SampleClock *clock, double end, const double *u, int n,
                 void (*commit)(void *context, const double *inputs), void *context) {
-    long long k_end = (long long)newest(clock, end);
+    clock_step_to(clock, end, newest(clock, end), u, n, commit, context);
+}
+
+void clock_step_to(SampleClock *clock, double end, double reached, const double *u, int n,
+                   void (*commit)(void *context, const double *inputs), void *context) {
+    long long k_end = (long long)reached;
     /* A host's time may lag the FMU's by the layer's tolerance: the clock never runs backwards. */
     if (k_end < clock->k) k_end = clock->k;
     if (k_end > clock->k) {

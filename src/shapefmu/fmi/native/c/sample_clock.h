@@ -31,5 +31,10 @@ double clock_samples_in_step(const SampleClock *clock, double t, double h);
 /* Take the step to end with the n inputs u held over it: commit(context, inputs) per instant. */
 void clock_step(SampleClock *clock, double end, const double *u, int n,
                 void (*commit)(void *context, const double *inputs), void *context);
+/* The same two in one division: reached = clock_reached(end) = K(end), checked against k by the
+ * caller, then clock_step_to. */
+double clock_reached(const SampleClock *clock, double end);
+void clock_step_to(SampleClock *clock, double end, double reached, const double *u, int n,
+                   void (*commit)(void *context, const double *inputs), void *context);
 
 #endif
