@@ -96,6 +96,24 @@ def test_parameters_set_before_initialisation_are_used_as_the_twin_uses_them(nat
     assert_same(run_fmpy(native_ekf, inputs, 2e-3, OUTPUTS, start_values=changed), twin)
 
 
+def test_equals_the_twin_in_the_c_host_with_drifting_time_random_steps_and_exit_handler_teardown(
+        native_ekf, ekf_fmu, c_host, tmp_path):
+    """Both FMUs side by side in tests/hosts_c/fmi2_host.c: t += h with random steps (a third onto
+    the grid), a 20 Hz vibration the EKF locks on to, instances freed from an exit handler."""
+    from c_host import fmu_arguments, host_rows, run_host
+
+    csv = tmp_path / "both.csv"
+    result = run_host(c_host, [fmu_arguments(ekf_fmu, tmp_path / "twin"), fmu_arguments(native_ekf, tmp_path / "native")],
+                      "--random", 11, 1e-9 * H, 7.3 * H, 8000, H, "--period", 50 * H, "--square", 0.0,
+                      "--teardown", "atexit", "--csv", csv)
+    assert result.returncode == 0, result.stderr[-3000:]
+    rows = host_rows(csv)
+    twin, native = rows[(0, 0, 0)], rows[(0, 1, 0)]
+    assert np.array_equal(twin[:, :3], native[:, :3])  # the same times and inputs
+    assert twin[-1, -1] == 1.0 and twin[-1, 4] == pytest.approx(2 * math.pi * 20.0, rel=1e-3)  # it tuned
+    assert_same(native[:, 3:], twin[:, 3:])
+
+
 def _drive(slave, vr, inputs, start):
     rows = []
     for k, values in enumerate(inputs, start=start):
