@@ -1,8 +1,8 @@
 """The native C EKFTuner FMU: the pythonfmu EKFTuner's variables and numbers, no Python on the host.
 
 ``build_native_ekf_tuner(out_path, **start_values) -> Path`` writes an FMI 2.0 Co-Simulation FMU:
-the generic FMI 2.0 layer, the EKF tuner's model part (``c/ekf_tuner_fmi2.c``: runtime/ekf.py's
-ResonanceEKF and runtime/ekf_tuner.py's EKFTunedShaperKernel, operation for operation), the
+the generic FMI 2.0 layer, the EKF tuner's model part (``c/ekf_tuner_fmi2.c``: runtime/ekf_tuner.py's
+EKFTunedShaperKernel; ``c/resonance_ekf.c``: runtime/ekf.py's ResonanceEKF; operation for operation), the
 absolute sample grid (``c/sample_clock.c``), the closed-form designs (``c/shaper_designs.c``) and
 a generated ``model.c`` holding the variables and their start values. Nothing is designed at build
 time: every parameter is used at the exit of initialisation in closed form, so each may be set
@@ -19,8 +19,8 @@ from shapefmu.fmi.native.kernel_fmu import ROLES, c_string, number_by_type, writ
 from shapefmu.fmi.python.builder import designed_slave
 
 NAME = "EKFTuner"
-SOURCES = ("ekf_tuner_fmi2.c", "sample_clock.c", "shaper_designs.c")
-HEADERS = ("ekf_tuner_model.h", "sample_clock.h", "shaper_designs.h")
+SOURCES = ("ekf_tuner_fmi2.c", "resonance_ekf.c", "sample_clock.c", "shaper_designs.c")
+HEADERS = ("ekf_tuner_model.h", "resonance_ekf.h", "sample_clock.h", "shaper_designs.h")
 MEANINGS = {"kind": "EKF_KIND", "n": "EKF_ORDER", "Ts": "EKF_PERIOD", "omega0": "EKF_OMEGA0",
             "amplitude": "EKF_AMPLITUDE", "retune_fraction": "EKF_RETUNE", "u": "EKF_COMMAND",
             "vibration": "EKF_VIBRATION", "y": "EKF_OUTPUT", "omega_est": "EKF_OMEGA_EST", "zeta_est": "EKF_ZETA_EST",

@@ -15,41 +15,18 @@
 #include <string.h>
 
 #include "ekf_tuner_model.h"
+#include "resonance_ekf.h"
 #include "sample_clock.h"
 #include "shaper_designs.h"
 
 #define PI 3.14159265358979323846
-/* runtime/ekf.py's default_tuning and ResonanceEKF defaults */
-#define P0_OMEGA 0.25
-#define P0_SIGMA 0.1
-#define Q_PHASOR 1e-3
-#define Q_OMEGA_PER_PERIOD 1e-4
-#define Q_SIGMA_PER_PERIOD 1e-5
-#define R_AMPLITUDE 0.1
-#define OMEGA_TOL 2e-3
-#define SIGMA_TOL 5e-3
-#define NIS_LIMIT 9.0
-/* The convergence window is one period of omega0 in samples; its history is allocated. */
-#define MAX_WINDOW 1000000L
+
 /* A shaper's delay line (runtime/limits.py MAX_SAMPLED_LENGTH). */
 #define MAX_LENGTH 1000000L
 /* Impulses of one single-mode closed-form design: zv_dn of order n has n + 2, n <= 62. */
 #define MAX_IMPULSES 64
 #define MAX_ORDER 62
 
-typedef struct {
-    double x[4], P[4][4];
-    double p0[4], q[4], r, omega_tol, sigma_tol, nis_limit, nis, fs, dt, good[4];
-    long long window, count, slot;  /* the last `count` <= window estimates, the next one goes to slot */
-    long long samples, missing, resets, reacquisitions, reset_last, converged;
-} Ekf;
-
-/* A queue of window slots in a circular buffer of `window` entries. */
-typedef struct {
-    long long size, front;
-} Queue;
-
-enum { HIGH_OMEGA, LOW_OMEGA, HIGH_SIGMA, LOW_SIGMA, QUEUES };
 
 typedef struct {
     long long length, pos;  /* taps[0..length), line[0..2 length): u[k - d] = line[pos + d] */
@@ -58,13 +35,7 @@ typedef struct {
 
 typedef struct {
     Ekf ekf;
-    /* The window of estimates (omega, sigma), a ring (recent[2 slot], recent[2 slot + 1]), and for
-     * each extreme a monotonic queue of the slots, oldest first, that may still be it:
-     * runtime/ekf.py scans its deque for max - min every sample, these give the same values in
-     * O(1) per sample. */
-    double *recent;          /* 2 * window */
-    long long *queued;       /* QUEUES * window */
-    Queue queue[QUEUES];
+    EkfHistory history;
     Streaming active, pending;
     /* the tuner's scalars (saved as they are in an FMU state) */
     long long started, has_active, has_pending, has_design, has_last, designs, rest;
@@ -86,162 +57,6 @@ static size_t n_variables(void) {
 }
 
 static double real_of(const Fmi2Instance *inst, EkfMeaning meaning) { return inst->reals[tuner_of(inst)->vr[meaning]]; }
-
-/* ---------------------------------------------------------------- the EKF (runtime/ekf.py) */
-
-static void diagonal(double P[4][4], const double *variances) {
-    for (int i = 0; i < 4; i++)
-        for (int j = 0; j < 4; j++) P[i][j] = i == j ? variances[i] : 0.0;
-}
-
-static void ekf_start(Ekf *e, double fs, double omega0, double amplitude, long long window) {
-    memset(e, 0, sizeof *e);
-    e->fs = fs;
-    const double samples_per_period = 2.0 * PI * fs / omega0;
-    const double q_omega = pow(Q_OMEGA_PER_PERIOD * omega0, 2) / samples_per_period;
-    const double q_sigma = pow(Q_SIGMA_PER_PERIOD * omega0, 2) / samples_per_period;
-    const double p0[4] = {pow(amplitude, 2), pow(amplitude, 2), pow(P0_OMEGA * omega0, 2), pow(P0_SIGMA * omega0, 2)};
-    const double q[4] = {pow(Q_PHASOR * amplitude, 2), pow(Q_PHASOR * amplitude, 2), q_omega, q_sigma};
-    memcpy(e->p0, p0, sizeof p0);
-    memcpy(e->q, q, sizeof q);
-    e->r = pow(R_AMPLITUDE * amplitude, 2);
-    e->omega_tol = OMEGA_TOL, e->sigma_tol = SIGMA_TOL, e->nis_limit = NIS_LIMIT;
-    e->window = window;
-    e->nis = 1.0;
-    e->dt = 1.0 / fs;
-    e->x[0] = 0.0, e->x[1] = 0.0, e->x[2] = omega0, e->x[3] = 0.0;
-    diagonal(e->P, e->p0);
-    memcpy(e->good, e->x, sizeof e->x);
-}
-
-/* Eqs. (15)-(16): the state through eq. (24), P- = F P F^T + Q (phase 0: H = [1, 0, 0, 0]). */
-static void ekf_predict(Ekf *e) {
-    const double x1 = e->x[0], x2 = e->x[1], omega = e->x[2], sigma = e->x[3], dt = e->dt;
-    const double decay = exp(-sigma * dt);
-    const double c = decay * cos(omega * dt), s = decay * sin(omega * dt);
-    const double f1 = c * x1 + s * x2, f2 = -s * x1 + c * x2;
-    const double F1[4] = {c, s, dt * f2, -dt * f1}, F2[4] = {-s, c, -dt * f1, -dt * f2};
-    double (*P)[4] = e->P, A1[4], A2[4];
-    for (int j = 0; j < 4; j++) {
-        A1[j] = F1[0] * P[0][j] + F1[1] * P[1][j] + F1[2] * P[2][j] + F1[3] * P[3][j];
-        A2[j] = F2[0] * P[0][j] + F2[1] * P[1][j] + F2[2] * P[2][j] + F2[3] * P[3][j];
-    }
-    const double *q = e->q;
-    const double p11 = A1[0] * F1[0] + A1[1] * F1[1] + A1[2] * F1[2] + A1[3] * F1[3] + q[0];
-    const double p12 = A1[0] * F2[0] + A1[1] * F2[1] + A1[2] * F2[2] + A1[3] * F2[3];
-    const double p22 = A2[0] * F2[0] + A2[1] * F2[1] + A2[2] * F2[2] + A2[3] * F2[3] + q[1];
-    const double p13 = A1[2], p14 = A1[3], p23 = A2[2], p24 = A2[3];
-    const double p33 = P[2][2] + q[2], p34 = P[2][3], p44 = P[3][3] + q[3];
-    e->x[0] = f1, e->x[1] = f2;
-    const double next[4][4] = {{p11, p12, p13, p14}, {p12, p22, p23, p24}, {p13, p23, p33, p34}, {p14, p24, p34, p44}};
-    memcpy(e->P, next, sizeof next);
-}
-
-/* Eqs. (17)-(19) for z = x1 + n, P = P- - K S K^T. */
-static void ekf_update(Ekf *e, double z) {
-    double (*P)[4] = e->P, pht[4], K[4];
-    const double h1 = 1.0, h2 = 0.0;  /* cos(0), sin(0): the reference phase 0 */
-    for (int i = 0; i < 4; i++) pht[i] = h1 * P[i][0] + h2 * P[i][1];
-    const double innovation_var = h1 * pht[0] + h2 * pht[1] + e->r;
-    for (int i = 0; i < 4; i++) K[i] = pht[i] / innovation_var;
-    const double innovation = z - (h1 * e->x[0] + h2 * e->x[1]);
-    for (int i = 0; i < 4; i++) e->x[i] = e->x[i] + K[i] * innovation;
-    e->nis += (innovation * innovation / innovation_var - e->nis) / (double)e->window;
-    for (int i = 0; i < 4; i++)
-        for (int j = 0; j < 4; j++) P[i][j] = P[i][j] - pht[i] * K[j];
-}
-
-static int ekf_healthy(const Ekf *e) {
-    for (int i = 0; i < 4; i++) {
-        if (!isfinite(e->x[i])) return 0;
-        for (int j = 0; j < 4; j++)
-            if (!isfinite(e->P[i][j])) return 0;
-    }
-    for (int i = 0; i < 4; i++)
-        if (e->P[i][i] < 0.0) return 0;
-    return 0.0 < e->x[2] && e->x[2] < PI * e->fs;
-}
-
-static double omega_n(const Ekf *e) { return hypot(e->x[2], e->x[3]); }
-static double zeta_of(const Ekf *e) { return e->x[3] / hypot(e->x[2], e->x[3]); }
-
-static double estimate(const Tuner *t, long long slot, int which) {
-    return t->recent[2 * slot + (which >= HIGH_SIGMA)];
-}
-
-static void window_clear(Tuner *t) {
-    t->ekf.count = 0;
-    memset(t->queue, 0, sizeof t->queue);
-}
-
-static long long wrapped(long long i, long long w) { return i >= w ? i - w : i; }
-
-/* Append the estimate (omega, sigma) at the next slot; in a full window it replaces the oldest,
- * which leaves every queue it is still at the front of. */
-static void window_push(Tuner *t, double omega, double sigma) {
-    Ekf *e = &t->ekf;
-    const long long w = e->window, slot = e->slot;
-    const int full = e->count == w;
-    t->recent[2 * slot] = omega;
-    t->recent[2 * slot + 1] = sigma;
-    for (int k = 0; k < QUEUES; k++) {
-        Queue *queue = &t->queue[k];
-        long long *at = t->queued + k * w;
-        if (full && queue->size > 0 && at[queue->front] == slot) queue->front = wrapped(queue->front + 1, w), queue->size--;
-        const double value = k < HIGH_SIGMA ? omega : sigma;
-        const int high = k == HIGH_OMEGA || k == HIGH_SIGMA;
-        while (queue->size > 0) {
-            const double back = estimate(t, at[wrapped(queue->front + queue->size - 1, w)], k);
-            if (high ? back <= value : back >= value) queue->size--;
-            else break;
-        }
-        at[wrapped(queue->front + queue->size, w)] = slot;
-        queue->size++;
-    }
-    e->slot = wrapped(slot + 1, w);
-    if (!full) e->count++;
-}
-
-static double extreme(const Tuner *t, int which) {
-    return estimate(t, t->queued[which * t->ekf.window + t->queue[which].front], which);
-}
-
-/* Covariance of omega and sigma small and both estimates stable over the last window. */
-static int ekf_converged(const Tuner *t) {
-    const Ekf *e = &t->ekf;
-    const double omega = e->x[2];
-    const double omega_std = sqrt(e->P[2][2] > 0.0 ? e->P[2][2] : 0.0);
-    const double sigma_std = sqrt(e->P[3][3] > 0.0 ? e->P[3][3] : 0.0);
-    if (omega_std > e->omega_tol * omega || sigma_std > e->sigma_tol * omega) return 0;
-    if (e->count < e->window) return 0;
-    return extreme(t, HIGH_OMEGA) - extreme(t, LOW_OMEGA) <= e->omega_tol * omega
-           && extreme(t, HIGH_SIGMA) - extreme(t, LOW_SIGMA) <= e->sigma_tol * omega;
-}
-
-static void ekf_step(Tuner *t, double z) {
-    Ekf *e = &t->ekf;
-    e->samples++;
-    ekf_predict(e);
-    if (isfinite(z)) ekf_update(e, z);
-    else e->missing++;
-    e->reset_last = !ekf_healthy(e);
-    if (e->reset_last) {
-        e->resets++;
-        memcpy(e->x, e->good, sizeof e->x);
-        diagonal(e->P, e->p0);
-        window_clear(t);
-    } else {
-        if (e->nis > e->nis_limit) {
-            e->reacquisitions++;
-            diagonal(e->P, e->p0);
-            e->nis = 1.0;
-            window_clear(t);
-        }
-        memcpy(e->good, e->x, sizeof e->x);
-        window_push(t, e->x[2], e->x[3]);
-    }
-    e->converged = ekf_converged(t);
-}
 
 /* ---------------------------------------------------------------- the shaper (runtime/shaper_filter.py) */
 
@@ -308,9 +123,9 @@ static double streaming_step(Streaming *f, double u) {
 
 static void observe(Tuner *t, double measurement) {
     Ekf *e = &t->ekf;
-    ekf_step(t, measurement);
+    ekf_step(e, &t->history, measurement);
     if (!e->converged) return;
-    const double omega = omega_n(e), zeta = zeta_of(e);
+    const double omega = ekf_omega_n(e), zeta = e->x[3] / omega;  /* runtime/ekf.py's omega_n and zeta */
     if (!(0.0 <= zeta && zeta < 1.0)) return;  /* a growing or over-damped "mode" is no design point */
     if (t->has_design) {
         const double by_omega = fabs(omega - t->design_omega) / t->design_omega, by_zeta = fabs(zeta - t->design_zeta);
@@ -357,7 +172,7 @@ static void commit(void *context, const double *inputs) {
 
 static void publish_estimates(Fmi2Instance *inst) {
     const Tuner *t = tuner_of(inst);
-    const double natural = omega_n(&t->ekf);  /* hypot once: zeta_of's is the same value */
+    const double natural = ekf_omega_n(&t->ekf);
     inst->reals[t->vr[EKF_OMEGA_EST]] = natural;
     inst->reals[t->vr[EKF_ZETA_EST]] = t->ekf.x[3] / natural;
     inst->reals[t->vr[EKF_CONVERGED]] = t->ekf.converged ? 1.0 : 0.0;
@@ -385,10 +200,10 @@ static void release_run(Fmi2Instance *inst) {
     Tuner *t = tuner_of(inst);
     streaming_free(inst, &t->active);
     streaming_free(inst, &t->pending);
-    fmi2_release(inst, t->recent);
-    fmi2_release(inst, t->queued);
-    t->recent = NULL;
-    t->queued = NULL;
+    fmi2_release(inst, t->history.recent);
+    fmi2_release(inst, t->history.queued);
+    t->history.recent = NULL;
+    t->history.queued = NULL;
     t->started = t->has_active = t->has_pending = t->has_design = t->has_last = 0;
 }
 
@@ -432,20 +247,19 @@ fmi2Status model_exit_initialization(Fmi2Instance *inst) {
     if (!(omega0 < PI * fs))
         return fmi2_fail(inst, "%s: omega0 must be in (0, pi/Ts) = (0, %g) rad/s, got %g", function, PI * fs, omega0);
     const double window = nearbyint(2.0 * PI * fs / omega0);  /* Python's round: half to even */
-    if (!(window <= (double)MAX_WINDOW))
+    if (!(window <= (double)EKF_MAX_WINDOW))
         return fmi2_fail(inst, "%s: one period of omega0 = %g rad/s spans %.0f samples of Ts = %g s, the EKF's "
-                         "convergence window; at most %ld: raise Ts or omega0", function, omega0, window, ts, MAX_WINDOW);
+                         "convergence window; at most %ld: raise Ts or omega0", function, omega0, window, ts, EKF_MAX_WINDOW);
     release_run(inst);
     t->kind = closed_form_kind(fmi2_string(inst, t->vr[EKF_KIND]));
     t->order = inst->integers[t->vr[EKF_ORDER] - ekf_tuner_model.n_real];
     t->retune = real_of(inst, EKF_RETUNE);
     ekf_start(&t->ekf, fs, omega0, real_of(inst, EKF_AMPLITUDE), window < 2.0 ? 2 : (long long)window);
     t->h = 1.0 / t->ekf.fs;
-    t->recent = fmi2_allocate(inst, 2 * (size_t)t->ekf.window, sizeof(double));
-    t->queued = fmi2_allocate(inst, QUEUES * (size_t)t->ekf.window, sizeof(long long));
-    if (t->recent == NULL || t->queued == NULL)
+    t->history.recent = fmi2_allocate(inst, 2 * (size_t)t->ekf.window, sizeof(double));
+    t->history.queued = fmi2_allocate(inst, EKF_QUEUES * (size_t)t->ekf.window, sizeof(long long));
+    if (t->history.recent == NULL || t->history.queued == NULL)
         return fmi2_fail(inst, "%s: out of memory for a window of %lld samples", function, t->ekf.window);
-    window_clear(t);
     clock_start(&t->clock, inst->start_time, ts);
     t->failure = NULL;
     t->started = 1;
@@ -558,7 +372,7 @@ void model_save_state(const Fmi2Instance *inst, unsigned char *bytes) {
     memcpy(bytes, &header, sizeof header);
     if (!t->started) return;
     unsigned char *at = bytes + sizeof header;
-    memcpy(at, t->recent, 2 * (size_t)t->ekf.window * sizeof(double));
+    memcpy(at, t->history.recent, 2 * (size_t)t->ekf.window * sizeof(double));
     at = put_streaming(&t->active, at + 2 * (size_t)t->ekf.window * sizeof(double));
     put_streaming(&t->pending, at);
 }
@@ -591,19 +405,19 @@ int model_restore_state(Fmi2Instance *inst, const unsigned char *bytes, size_t s
     release_run(inst);
     if (!header.started) return size == sizeof header ? 0 : -1;
     const long long window = header.ekf.window;
-    if (window < 2 || window > MAX_WINDOW || header.ekf.count < 0 || header.ekf.count > window
+    if (window < 2 || window > EKF_MAX_WINDOW || header.ekf.count < 0 || header.ekf.count > window
         || header.ekf.slot < 0 || header.ekf.slot >= window || (header.ekf.converged != 0 && header.ekf.converged != 1) || header.kind < 0 || header.kind >= KIND_NOT_CLOSED_FORM || header.order < 0
         || header.order > MAX_ORDER || !(header.clock.ts > 0.0) || !(header.h > 0.0))
         return -1;
     const unsigned char *at = bytes + sizeof header, *end = bytes + size;
     if ((size_t)(end - at) < 2 * (size_t)window * sizeof(double)) return -1;
-    t->recent = fmi2_allocate(inst, 2 * (size_t)window, sizeof(double));
-    t->queued = fmi2_allocate(inst, QUEUES * (size_t)window, sizeof(long long));
-    if (t->recent == NULL || t->queued == NULL) {
+    t->history.recent = fmi2_allocate(inst, 2 * (size_t)window, sizeof(double));
+    t->history.queued = fmi2_allocate(inst, EKF_QUEUES * (size_t)window, sizeof(long long));
+    if (t->history.recent == NULL || t->history.queued == NULL) {
         release_run(inst);
         return -1;
     }
-    memcpy(t->recent, at, 2 * (size_t)window * sizeof(double));
+    memcpy(t->history.recent, at, 2 * (size_t)window * sizeof(double));
     at += 2 * (size_t)window * sizeof(double);
     if (take_streaming(t, &t->active, header.active_length, header.active_pos, &at, end) != 0
         || take_streaming(t, &t->pending, header.pending_length, header.pending_pos, &at, end) != 0 || at != end
@@ -612,14 +426,7 @@ int model_restore_state(Fmi2Instance *inst, const unsigned char *bytes, size_t s
         return -1;
     }
     t->ekf = header.ekf, t->clock = header.clock;
-    /* the queues from the window's estimates, pushed again oldest first */
-    const long long count = t->ekf.count;
-    window_clear(t);
-    t->ekf.slot = wrapped(t->ekf.slot + window - count, window);
-    for (long long j = 0; j < count; j++) {
-        const long long slot = t->ekf.slot;
-        window_push(t, t->recent[2 * slot], t->recent[2 * slot + 1]);
-    }
+    ekf_rebuild_history(&t->ekf, &t->history);
     t->has_active = header.has_active, t->has_pending = header.has_pending, t->has_design = header.has_design;
     t->has_last = header.has_last, t->designs = header.designs, t->rest = header.rest;
     t->design_omega = header.design_omega, t->design_zeta = header.design_zeta, t->last_command = header.last_command;
