@@ -76,6 +76,13 @@ def test_native_shaper_and_filter_archives(native_shapers, native_filters):
         assert_complete(fmu)
 
 
+def test_every_native_twin_archive(tmp_path):
+    from shapefmu.fmi.native.twins import build_all_native
+
+    for fmu in build_all_native(tmp_path):
+        assert_complete(fmu)
+
+
 def test_plant_archives_fmi2_and_fmi3(plant_fmus, tmp_path):
     from shapefmu.fmi.native import build_plant_fmu
 
