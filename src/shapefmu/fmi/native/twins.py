@@ -18,6 +18,7 @@ TWINS = {
     "Shaper": ("shapefmu.fmi.native.sampled", "build_native_shaper"),
     "ShapeFilter": ("shapefmu.fmi.native.sampled", "build_native_shape_filter"),
     "EKFTuner": ("shapefmu.fmi.native.ekf_tuner", "build_native_ekf_tuner"),
+    "STOSController": ("shapefmu.fmi.native.stos", "build_native_stos"),
 }
 
 

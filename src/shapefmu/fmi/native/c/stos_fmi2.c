@@ -1,0 +1,247 @@
+/* The native STOS controller (paper 002) behind the generic FMI 2.0 layer: the C twin of the
+ * pythonfmu STOSController, with the same variables and sampled semantics.
+ *
+ * The switching curves are designed at build time (stos_model.h) for the build's rigid body and
+ * shaper, so b, U, damping, kind, n, n_modes, f[i] and zeta[i] keep their build values (another
+ * value is refused with a message saying to rebuild). Ts and the settle law's switch and gains are
+ * used as they are at the exit of initialisation and may change before it.
+ *
+ * The law runs once per sample of the absolute grid t0 + k Ts (sample_clock.c) with the inputs in
+ * effect at that instant. The output u feeds through: at a communication point it is the law
+ * evaluated at the current sample's inputs from the committed state, which it leaves as it was
+ * (the pythonfmu FMU's _preview); fmi2DoStep commits the samples.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "sample_clock.h"
+#include "stos_model.h"
+
+typedef struct {
+    long long started, dirty, settle_on;
+    StosSettle settle;
+    StosState state;
+    SampleClock clock;
+    size_t vr[STOS_MEANINGS];
+} Controller;
+
+static Controller *controller_of(const Fmi2Instance *inst) { return (Controller *)inst->model; }
+
+static size_t n_variables(void) {
+    return stos_model.n_real + stos_model.n_integer + stos_model.n_boolean + stos_model.n_string;
+}
+
+static double real_of(const Fmi2Instance *inst, StosMeaning meaning) {
+    return inst->reals[controller_of(inst)->vr[meaning]];
+}
+
+/* The inputs of the current sample: latched, or as set now while it is open. */
+static void current_inputs(const Fmi2Instance *inst, double *inputs) {
+    const Controller *c = controller_of(inst);
+    if (c->clock.latched) {
+        memcpy(inputs, c->clock.v, 3 * sizeof(double));
+    } else {
+        inputs[0] = real_of(inst, STOS_TARGET), inputs[1] = real_of(inst, STOS_POSITION);
+        inputs[2] = real_of(inst, STOS_VELOCITY);
+    }
+}
+
+/* u for the current sample's inputs from the committed state, which stays as it was. */
+static void preview(Fmi2Instance *inst) {
+    Controller *c = controller_of(inst);
+    double inputs[3];
+    current_inputs(inst, inputs);
+    StosState scratch = c->state;
+    inst->reals[c->vr[STOS_OUTPUT]] = stos_control(&stos_model.curves, c->settle_on ? &c->settle : NULL, &scratch,
+                                                   inputs[0], inputs[1], inputs[2]);
+    c->dirty = 0;
+}
+
+static void commit(void *context, const double *inputs) {
+    Controller *c = context;
+    stos_control(&stos_model.curves, c->settle_on ? &c->settle : NULL, &c->state, inputs[0], inputs[1], inputs[2]);
+}
+
+/* ---------------------------------------------------------------- life cycle */
+
+void model_describe(Fmi2ModelInfo *info) {
+    memset(info, 0, sizeof *info);
+    info->guid = stos_model.guid;
+    info->n_real = stos_model.n_real;
+    info->n_integer = stos_model.n_integer;
+    info->n_boolean = stos_model.n_boolean;
+    info->n_string = stos_model.n_string;
+}
+
+Fmi2Role model_variable(const Fmi2Instance *inst, Fmi2Type type, size_t vr, const char **name) {
+    (void)inst, (void)type;
+    if (vr >= n_variables()) return FMI2_NO_VARIABLE;
+    *name = stos_model.variables[vr].name;
+    return stos_model.variables[vr].role;
+}
+
+void model_reset(Fmi2Instance *inst) {
+    const size_t n_real = stos_model.n_real, n_integer = stos_model.n_integer;
+    for (size_t vr = 0; vr < n_variables(); vr++) {
+        const StosVariable *v = &stos_model.variables[vr];
+        if (vr < n_real) inst->reals[vr] = v->start;
+        else if (vr < n_real + n_integer) inst->integers[vr - n_real] = (int)v->start;
+        else if (vr < n_real + n_integer + stos_model.n_boolean) inst->booleans[vr - n_real - n_integer] = v->start != 0.0;
+        else snprintf(fmi2_string(inst, vr), FMI2_STRING_CAPACITY + 1, "%s", v->string_start);
+    }
+    Controller *c = controller_of(inst);
+    c->started = c->dirty = 0;
+}
+
+int model_instantiate(Fmi2Instance *inst) {
+    Controller *c = fmi2_allocate(inst, 1, sizeof(Controller));
+    if (c == NULL) return -1;
+    memset(c, 0, sizeof *c);
+    inst->model = c;
+    for (size_t vr = 0; vr < n_variables(); vr++) c->vr[stos_model.variables[vr].meaning] = vr;
+    model_reset(inst);
+    return 0;
+}
+
+void model_free(Fmi2Instance *inst) {
+    fmi2_release(inst, inst->model);
+    inst->model = NULL;
+}
+
+fmi2Status model_exit_initialization(Fmi2Instance *inst) {
+    static const char *const function = "fmi2ExitInitializationMode";
+    Controller *c = controller_of(inst);
+    const double ts = real_of(inst, STOS_PERIOD);
+    c->settle_on = inst->booleans[c->vr[STOS_SETTLE] - stos_model.n_real - stos_model.n_integer];
+    if (c->settle_on) {
+        const StosSettle s = {real_of(inst, STOS_KP), real_of(inst, STOS_KD), real_of(inst, STOS_KI), ts,
+                              real_of(inst, STOS_X_ENTER), real_of(inst, STOS_V_ENTER), real_of(inst, STOS_X_EXIT),
+                              real_of(inst, STOS_V_EXIT)};
+        const struct { const char *name; double value; int ok; const char *valid; } checks[] = {
+            {"kp", s.kp, s.kp > 0.0, "> 0"}, {"kd", s.kd, s.kd > 0.0, "> 0"}, {"ki", s.ki, s.ki >= 0.0, ">= 0"},
+            {"x_enter", s.x_enter, s.x_enter > 0.0, "> 0"}, {"v_enter", s.v_enter, s.v_enter > 0.0, "> 0"},
+            {"x_exit", s.x_exit, s.x_exit >= s.x_enter, ">= x_enter"}, {"v_exit", s.v_exit, s.v_exit >= s.v_enter, ">= v_enter"}};
+        for (size_t i = 0; i < sizeof checks / sizeof checks[0]; i++)
+            if (!checks[i].ok)
+                return fmi2_fail(inst, "%s: with settle on, %s must be %s, got %g", function, checks[i].name,
+                                 checks[i].valid, checks[i].value);
+        c->settle = s;
+    }
+    c->state.settling = 0.0, c->state.integral = 0.0;
+    clock_start(&c->clock, inst->start_time, ts);
+    c->started = 1;
+    preview(inst);
+    return fmi2OK;
+}
+
+fmi2Status model_update(Fmi2Instance *inst, const char *function) {
+    (void)function;
+    Controller *c = controller_of(inst);
+    if (c->started && c->dirty) preview(inst);
+    return fmi2OK;
+}
+
+fmi2Status model_do_step(Fmi2Instance *inst, double t, double h) {
+    Controller *c = controller_of(inst);
+    const double reached = clock_reached(&c->clock, t + h), samples = reached - (double)c->clock.k;
+    if (samples > (double)MAX_SAMPLES_PER_STEP)
+        return fmi2_fail(inst, "fmi2DoStep: communication step h = %g s spans %.0f samples of Ts = %g s; at most %lld "
+                         "per step", h, samples, c->clock.ts, MAX_SAMPLES_PER_STEP);
+    const double inputs[3] = {real_of(inst, STOS_TARGET), real_of(inst, STOS_POSITION), real_of(inst, STOS_VELOCITY)};
+    clock_step_to(&c->clock, t + h, reached, inputs, 3, commit, c);
+    preview(inst);
+    return fmi2OK;
+}
+
+/* ---------------------------------------------------------------- values */
+
+static fmi2Status keeps(Fmi2Instance *inst, const StosVariable *v, const char *given, int same, const char *function) {
+    if (same) return fmi2OK;
+    char start[64];
+    if (v->string_start != NULL) snprintf(start, sizeof start, "%s", v->string_start);
+    else snprintf(start, sizeof start, "%.17g", v->start);
+    return fmi2_fail(inst, "%s: %s is %s in this native FMU, whose switching curves are designed at build time; got %s "
+                     "(rebuild it with shapefmu build stos-controller --native for another value)", function, v->name,
+                     start, given);
+}
+
+fmi2Status model_check_real(Fmi2Instance *inst, size_t vr, double value, const char *function) {
+    const StosVariable *v = &stos_model.variables[vr];
+    if (!isfinite(value) || (v->meaning == STOS_PERIOD && !(value > 0.0)))
+        return fmi2_fail(inst, "%s: %s must be %s, got %g", function, v->name,
+                         v->meaning == STOS_PERIOD ? "> 0" : "finite", value);
+    if (v->meaning == STOS_DESIGN) {
+        char given[32];
+        snprintf(given, sizeof given, "%.17g", value);
+        return keeps(inst, v, given, value == v->start, function);
+    }
+    return fmi2OK;
+}
+
+fmi2Status model_check_integer(Fmi2Instance *inst, size_t vr, int value, const char *function) {
+    const StosVariable *v = &stos_model.variables[vr];
+    if (v->meaning != STOS_DESIGN) return fmi2OK; /* settle, a Boolean, reaches here too */
+    char given[32];
+    snprintf(given, sizeof given, "%d", value);
+    return keeps(inst, v, given, value == (int)v->start, function);
+}
+
+fmi2Status model_check_string(Fmi2Instance *inst, size_t vr, const char *value, const char *function) {
+    const StosVariable *v = &stos_model.variables[vr];
+    return keeps(inst, v, value, strcmp(value, v->string_start) == 0, function);
+}
+
+void model_changed(Fmi2Instance *inst, size_t vr) {
+    Controller *c = controller_of(inst);
+    const StosMeaning meaning = stos_model.variables[vr].meaning;
+    if (meaning == STOS_TARGET || meaning == STOS_POSITION || meaning == STOS_VELOCITY) c->dirty = 1;
+}
+
+void model_states_changed(Fmi2Instance *inst) { (void)inst; }
+
+fmi2Status model_partial_derivative(Fmi2Instance *inst, size_t unknown, size_t known, double *entry,
+                                    const char *function) {
+    (void)unknown, (void)known, (void)entry;
+    return fmi2_fail(inst, "%s: this FMU provides no directional derivatives", function);
+}
+
+/* ---------------------------------------------------------------- state: the Controller's plain data */
+
+#define STATE_MAGIC 0x53544f5355ULL /* "STOSU" */
+
+typedef struct {
+    long long magic, started, dirty, settle_on;
+    StosSettle settle;
+    StosState state;
+    SampleClock clock;
+} StateBytes;
+
+size_t model_state_size(const Fmi2Instance *inst) {
+    (void)inst;
+    return sizeof(StateBytes);
+}
+
+void model_save_state(const Fmi2Instance *inst, unsigned char *bytes) {
+    const Controller *c = controller_of(inst);
+    StateBytes saved;
+    memset(&saved, 0, sizeof saved);
+    saved.magic = (long long)STATE_MAGIC, saved.started = c->started, saved.dirty = c->dirty;
+    saved.settle_on = c->settle_on, saved.settle = c->settle, saved.state = c->state, saved.clock = c->clock;
+    memcpy(bytes, &saved, sizeof saved);
+}
+
+int model_restore_state(Fmi2Instance *inst, const unsigned char *bytes, size_t size) {
+    Controller *c = controller_of(inst);
+    StateBytes saved;
+    if (size != sizeof saved) return -1;
+    memcpy(&saved, bytes, sizeof saved);
+    if (saved.magic != (long long)STATE_MAGIC || (saved.started | saved.dirty | saved.settle_on) > 1
+        || saved.started < 0 || saved.dirty < 0 || saved.settle_on < 0
+        || (saved.state.settling != 0.0 && saved.state.settling != 1.0) || !isfinite(saved.state.integral)
+        || (saved.started && !(saved.clock.ts > 0.0)))
+        return -1;
+    c->started = saved.started, c->dirty = saved.dirty, c->settle_on = saved.settle_on;
+    c->settle = saved.settle, c->state = saved.state, c->clock = saved.clock;
+    return 0;
+}
