@@ -19,6 +19,7 @@ TWINS = {
     "ShapeFilter": ("shapefmu.fmi.native.sampled", "build_native_shape_filter"),
     "EKFTuner": ("shapefmu.fmi.native.ekf_tuner", "build_native_ekf_tuner"),
     "STOSController": ("shapefmu.fmi.native.stos", "build_native_stos"),
+    "ReferencePlayer": ("shapefmu.fmi.native.reference", "build_native_reference"),
 }
 
 

@@ -68,9 +68,11 @@ void fmi2_release(Fmi2Instance *inst, void *pointer) {
     if (pointer != NULL) inst->callbacks.freeMemory(pointer);
 }
 
+size_t fmi2_string_capacity(const Fmi2Instance *inst) { return inst->info.string_capacity; }
+
 char *fmi2_string(Fmi2Instance *inst, size_t vr) {
     const size_t first = inst->info.n_real + inst->info.n_integer + inst->info.n_boolean;
-    return inst->strings + (vr - first) * (FMI2_STRING_CAPACITY + 1);
+    return inst->strings + (vr - first) * (inst->info.string_capacity + 1);
 }
 
 /* ---------------------------------------------------------------- life cycle */
@@ -117,6 +119,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
      * (fmu_retire), and its address must not come back soon as another instance's. */
     Fmi2Instance *inst = calloc(1, sizeof(Fmi2Instance));
     if (inst == NULL) return NULL;
+    if (info.string_capacity == 0) info.string_capacity = FMI2_STRING_CAPACITY;
     inst->info = info;
     inst->callbacks = *functions;
     inst->type = fmuType;
@@ -126,7 +129,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     inst->reals = fmi2_allocate(inst, info.n_real, sizeof(double));
     inst->integers = fmi2_allocate(inst, info.n_integer, sizeof(int));
     inst->booleans = fmi2_allocate(inst, info.n_boolean, sizeof(int));
-    inst->strings = fmi2_allocate(inst, info.n_string, FMI2_STRING_CAPACITY + 1);
+    inst->strings = fmi2_allocate(inst, info.n_string, info.string_capacity + 1);
     if (inst->name == NULL || (info.n_real && !inst->reals) || (info.n_integer && !inst->integers)
         || (info.n_boolean && !inst->booleans) || (info.n_string && !inst->strings) || model_instantiate(inst) != 0) {
         log_instantiation_error(functions, instanceName, "out of memory");
@@ -348,9 +351,9 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
     for (size_t i = 0; i < nvr; i++) {
         if (check_settable(inst, FMI2_STRING, vr[i], "fmi2SetString") != fmi2OK) return fmi2Error;
         if (value[i] == NULL) return fmi2_fail(inst, "fmi2SetString: value %zu is NULL", i);
-        if (strlen(value[i]) > FMI2_STRING_CAPACITY)
-            return fmi2_fail(inst, "fmi2SetString: a value of %zu characters is longer than the %d this FMU holds",
-                             strlen(value[i]), FMI2_STRING_CAPACITY);
+        if (strlen(value[i]) > inst->info.string_capacity)
+            return fmi2_fail(inst, "fmi2SetString: a value of %zu characters is longer than the %zu this FMU holds",
+                             strlen(value[i]), inst->info.string_capacity);
         if (model_check_string(inst, vr[i], value[i], "fmi2SetString") != fmi2OK) return fmi2Error;
     }
     for (size_t i = 0; i < nvr; i++) {

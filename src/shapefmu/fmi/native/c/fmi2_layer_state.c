@@ -27,7 +27,7 @@ typedef struct {
     size_t model_size;
 } Snapshot;
 
-static size_t string_bytes(const Fmi2Instance *inst) { return inst->info.n_string * (FMI2_STRING_CAPACITY + 1); }
+static size_t string_bytes(const Fmi2Instance *inst) { return inst->info.n_string * (inst->info.string_capacity + 1); }
 
 /* FNV-1a of this FMU's GUID and variable counts: the same for every instance of one FMU build. */
 static unsigned long long identity(const Fmi2Instance *inst) {
@@ -56,7 +56,7 @@ static fmi2Status check_values(Fmi2Instance *inst, const Snapshot *s) {
             return fmi2Error;
     for (size_t i = 0, vr = info->n_real + info->n_integer + info->n_boolean; i < info->n_string; i++, vr++)
         if (model_variable(inst, FMI2_STRING, vr, &name) != FMI2_NO_VARIABLE
-            && model_check_string(inst, vr, s->strings + i * (FMI2_STRING_CAPACITY + 1), "fmi2SetFMUstate") != fmi2OK)
+            && model_check_string(inst, vr, s->strings + i * (inst->info.string_capacity + 1), "fmi2SetFMUstate") != fmi2OK)
             return fmi2Error;
     return fmi2OK;
 }
@@ -232,7 +232,7 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedSta
     p = take(s->strings, p, string_bytes(inst));
     take(s->model, p, model_size);
     /* Strings are read back as C strings: make every slot end inside itself. */
-    for (size_t i = 0; i < info->n_string; i++) s->strings[i * (FMI2_STRING_CAPACITY + 1) + FMI2_STRING_CAPACITY] = '\0';
+    for (size_t i = 0; i < info->n_string; i++) s->strings[i * (inst->info.string_capacity + 1) + inst->info.string_capacity] = '\0';
     *FMUstate = s;
     return fmi2OK;
 }

@@ -17,7 +17,8 @@
 
 #include "fmi2Functions.h"
 
-/* Longest String value a variable holds (its valid values are names, e.g. a design kind). */
+/* Longest String value a variable holds by default (its valid values are names, e.g. a design
+ * kind); a model part holding longer text (a signal table) declares its own string_capacity. */
 #define FMI2_STRING_CAPACITY 63
 
 typedef enum {
@@ -49,6 +50,7 @@ typedef struct {
     int n_states;                /* Model Exchange: continuous states (0 for a Co-Simulation-only FMU) */
     size_t state_vr, derivative_vr; /* value references of the first state and its derivative */
     const double *state_nominal; /* n_states nominal values */
+    size_t string_capacity;      /* longest String value; 0: FMI2_STRING_CAPACITY */
 } Fmi2ModelInfo;
 
 typedef struct {
@@ -63,7 +65,7 @@ typedef struct {
     double start_time;           /* fmi2SetupExperiment's startTime (0 if not called) */
     double *reals;               /* every variable's value, indexed by value reference */
     int *integers, *booleans;
-    char *strings;               /* n_string slots of FMI2_STRING_CAPACITY + 1 characters */
+    char *strings;               /* n_string slots of info.string_capacity + 1 characters */
     void *model;                 /* the model part's own data */
 } Fmi2Instance;
 
@@ -76,8 +78,9 @@ void fmi2_debug(const Fmi2Instance *inst, const char *format, ...);
 /* count * size bytes from the host's allocator (NULL for count 0), and back. */
 void *fmi2_allocate(Fmi2Instance *inst, size_t count, size_t size);
 void fmi2_release(Fmi2Instance *inst, void *pointer);
-/* The String slot of value reference vr. */
+/* The String slot of value reference vr, and the longest value a slot holds. */
 char *fmi2_string(Fmi2Instance *inst, size_t vr);
+size_t fmi2_string_capacity(const Fmi2Instance *inst);
 const char *fmi2_mode_name(Fmi2Mode mode);
 
 /* ---- hooks the model part implements */

@@ -88,7 +88,7 @@ void model_reset(Fmi2Instance *inst) {
         if (vr < n_real) inst->reals[vr] = v->start;
         else if (vr < n_real + n_integer) inst->integers[vr - n_real] = (int)v->start;
         else if (vr < n_real + n_integer + stos_model.n_boolean) inst->booleans[vr - n_real - n_integer] = v->start != 0.0;
-        else snprintf(fmi2_string(inst, vr), FMI2_STRING_CAPACITY + 1, "%s", v->string_start);
+        else snprintf(fmi2_string(inst, vr), fmi2_string_capacity(inst) + 1, "%s", v->string_start);
     }
     Controller *c = controller_of(inst);
     c->started = c->dirty = 0;

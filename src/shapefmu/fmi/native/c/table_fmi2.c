@@ -1,0 +1,152 @@
+/* The native reference player behind the generic FMI 2.0 layer: the C twin of the pythonfmu
+ * ReferencePlayer, runtime/reference_player.py's SignalTable operation for operation.
+ *
+ * Variables (value references): Real 0 y, the table's value at the communication point (right-
+ * continuous at switches), Real 1 y_mean, its exact mean over the last step; String 2 table, the
+ * JSON text the table was parsed from at build time, which keeps its build value (another one is
+ * refused with a message saying to rebuild). No inputs: outputs change only in fmi2DoStep.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "table_model.h"
+
+enum { VR_Y, VR_Y_MEAN, VR_TABLE, VARIABLES };
+
+/* The first index whose time is >= t (left) or > t (right), as Python's bisect. */
+static size_t bisect(double t, int right) {
+    size_t low = 0, high = table_model.n_times;
+    while (low < high) {
+        const size_t mid = low + (high - low) / 2;
+        if (right ? table_model.times[mid] <= t : table_model.times[mid] < t) low = mid + 1;
+        else high = mid;
+    }
+    return low;
+}
+
+/* t, or the table time it lies within rounding of. */
+static double snap(double t) {
+    const size_t j = bisect(t, 0);
+    if (j >= 1 && fabs(table_model.times[j - 1] - t) <= table_model.tolerance) return table_model.times[j - 1];
+    if (j < table_model.n_times && fabs(table_model.times[j] - t) <= table_model.tolerance) return table_model.times[j];
+    return t;
+}
+
+/* j with times[j] <= t < times[j + 1]: -1 before the table, the last index after it. */
+static long segment(double t) { return (long)bisect(t, 1) - 1; }
+
+static double value(double t) {
+    t = snap(t);
+    const long j = segment(t);
+    if (j < 0) return table_model.before;
+    const double *times = table_model.times, *left = table_model.left, *right = table_model.right;
+    if ((size_t)j == table_model.n_times - 1 || table_model.hold) return right[j];
+    const double fraction = (t - times[j]) / (times[j + 1] - times[j]);
+    return right[j] + (left[j + 1] - right[j]) * fraction;
+}
+
+static double integral(double t) {
+    t = snap(t);
+    const long j = segment(t);
+    const double *times = table_model.times, *left = table_model.left, *right = table_model.right;
+    if (j < 0) return (t - times[0]) * table_model.before;
+    const double s = t - times[j];
+    if ((size_t)j == table_model.n_times - 1 || table_model.hold) return table_model.integral[j] + s * right[j];
+    const double slope = (left[j + 1] - right[j]) / (times[j + 1] - times[j]);
+    return table_model.integral[j] + s * right[j] + 0.5 * slope * s * s;
+}
+
+static double average(double t_start, double t_end) {
+    const double a = snap(t_start), b = snap(t_end);
+    if (b == a) return value(a);
+    return (integral(b) - integral(a)) / (b - a);
+}
+
+/* ---------------------------------------------------------------- FMI hooks */
+
+void model_describe(Fmi2ModelInfo *info) {
+    memset(info, 0, sizeof *info);
+    info->guid = table_model.guid;
+    info->n_real = 2;
+    info->n_string = 1;
+    const size_t length = strlen(table_model.table_text);
+    info->string_capacity = length > FMI2_STRING_CAPACITY ? length : FMI2_STRING_CAPACITY;
+}
+
+Fmi2Role model_variable(const Fmi2Instance *inst, Fmi2Type type, size_t vr, const char **name) {
+    static const char *const names[] = {"y", "y_mean", "table"};
+    (void)inst, (void)type;
+    if (vr >= VARIABLES) return FMI2_NO_VARIABLE;
+    *name = names[vr];
+    return vr == VR_TABLE ? FMI2_PARAMETER_FIXED : FMI2_COMPUTED;
+}
+
+void model_reset(Fmi2Instance *inst) {
+    inst->reals[VR_Y] = inst->reals[VR_Y_MEAN] = 0.0;
+    strcpy(fmi2_string(inst, VR_TABLE), table_model.table_text);
+}
+
+int model_instantiate(Fmi2Instance *inst) {
+    model_reset(inst);
+    return 0;
+}
+
+void model_free(Fmi2Instance *inst) { (void)inst; }
+
+fmi2Status model_exit_initialization(Fmi2Instance *inst) {
+    inst->reals[VR_Y] = inst->reals[VR_Y_MEAN] = value(inst->start_time);
+    return fmi2OK;
+}
+
+fmi2Status model_update(Fmi2Instance *inst, const char *function) {
+    (void)inst, (void)function;
+    return fmi2OK;
+}
+
+fmi2Status model_do_step(Fmi2Instance *inst, double t, double h) {
+    inst->reals[VR_Y] = value(t + h);
+    inst->reals[VR_Y_MEAN] = average(t, t + h);
+    return fmi2OK;
+}
+
+/* Reached only for values the layer lets through: the outputs of a restored FMU state. */
+fmi2Status model_check_real(Fmi2Instance *inst, size_t vr, double value_, const char *function) {
+    if (isfinite(value_)) return fmi2OK;
+    return fmi2_fail(inst, "%s: %s must be finite, got %g", function, vr == VR_Y ? "y" : "y_mean", value_);
+}
+
+fmi2Status model_check_integer(Fmi2Instance *inst, size_t vr, int value_, const char *function) {
+    (void)vr, (void)value_;
+    return fmi2_fail(inst, "%s: this FMU has no Integer or Boolean", function);
+}
+
+fmi2Status model_check_string(Fmi2Instance *inst, size_t vr, const char *text, const char *function) {
+    (void)vr;
+    if (strcmp(text, table_model.table_text) == 0) return fmi2OK;
+    return fmi2_fail(inst, "%s: table is the signal table this native FMU was built with (parsed at build time); got "
+                     "another one of %zu characters (rebuild it with shapefmu build reference TABLE --native for it)",
+                     function, strlen(text));
+}
+
+void model_changed(Fmi2Instance *inst, size_t vr) { (void)inst, (void)vr; }
+void model_states_changed(Fmi2Instance *inst) { (void)inst; }
+
+fmi2Status model_partial_derivative(Fmi2Instance *inst, size_t unknown, size_t known, double *entry,
+                                    const char *function) {
+    (void)unknown, (void)known, (void)entry;
+    return fmi2_fail(inst, "%s: this FMU provides no directional derivatives", function);
+}
+
+/* The outputs are values the layer saves; the table is constant: no state of its own. */
+size_t model_state_size(const Fmi2Instance *inst) {
+    (void)inst;
+    return 0;
+}
+
+void model_save_state(const Fmi2Instance *inst, unsigned char *bytes) { (void)inst, (void)bytes; }
+
+int model_restore_state(Fmi2Instance *inst, const unsigned char *bytes, size_t size) {
+    (void)inst, (void)bytes;
+    return size == 0 ? 0 : -1;
+}

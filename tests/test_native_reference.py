@@ -1,0 +1,222 @@
+"""The native C ReferencePlayer FMU equals its pythonfmu twin.
+
+Both play the same tables: the CasADi time-optimal input of the disk drive's move (a hold table with
+exact switch instants) and a linear table with a jump; the native y and y_mean equal the pythonfmu
+ones bit for bit in fmpy with steps that land on the switches (t += h) and with random steps, in
+libcosim and ecos, in our C host (t += h, exit-handler teardown), and to 1e-12 on win64 under Wine
+and aarch64 under qemu. Another table is refused with a message, the table's size is bounded at
+build time, and valgrind finds nothing.
+"""
+
+import json
+import shutil
+import subprocess
+import zipfile
+
+import numpy as np
+import pytest
+from cross_hosts import HEADERS, HOST
+from fmpy.validation import validate_fmu
+from fmu_drivers import configured, initialised
+from fmu_signal_drivers import run_ecos, run_fmpy, run_libcosim
+
+from shapefmu.fmi import build_fmu
+from shapefmu.fmi.native import reference
+from shapefmu.fmi.native.reference import build_native_reference
+
+LINEAR = json.dumps({"kind": "signal_table", "interpolation": "linear", "before": -0.5,
+                     "time": [0.1, 0.35, 0.35, 0.6, 0.8], "value": [0.0, 1.0, -2.0, 0.5, 0.5]})
+OUTPUTS = ["y", "y_mean"]
+
+
+@pytest.fixture(scope="module")
+def players(tmp_path_factory, time_optimal_solution):
+    folder = tmp_path_factory.mktemp("native_reference")
+    tables = {"time-optimal": time_optimal_solution.to_json(), "linear": LINEAR}
+    return {name: (build_native_reference(folder / f"native_{i}.fmu", table=text),
+                   build_fmu("ReferencePlayer", folder / f"twin_{i}.fmu", table=text))
+            for i, (name, text) in enumerate(tables.items())}
+
+
+def test_validation_passes_and_the_variables_are_the_twins(players):
+    from fmpy import read_model_description
+
+    native, twin = players["time-optimal"]
+    assert validate_fmu(str(native)) == []
+    described = lambda md: sorted((v.name, v.causality, v.variability, v.type, v.start)  # noqa: E731
+                                  for v in md.modelVariables)
+    assert described(read_model_description(str(native))) == described(read_model_description(str(twin)))
+
+
+@pytest.mark.parametrize("case", ["time-optimal", "linear"])
+def test_equals_the_twin_bit_for_bit_on_and_between_the_switches(players, case, time_optimal_solution):
+    native, twin = players[case]
+    end = time_optimal_solution.T if case == "time-optimal" else 1.0
+    h = end / 400  # t += h drifts onto and around the switches
+    runs = [run_fmpy(fmu, [{}] * 480, h, OUTPUTS) for fmu in (native, twin)]
+    assert runs[0] == runs[1]
+    assert len({row[0] for row in runs[1]}) > 2  # the table switched
+
+
+def test_equals_the_twin_with_random_steps(players):
+    native, twin = players["linear"]
+    rng = np.random.default_rng(4)
+    steps = rng.uniform(1e-9, 0.07, 300)
+    steps[::7] = 1e-15
+    times = np.concatenate([[0.0], np.cumsum(steps)])
+    rows = []
+    for fmu in (native, twin):
+        slave, vr = initialised(fmu)
+        out = []
+        for t, t_next in zip(times[:-1], times[1:]):
+            slave.doStep(t, t_next - t)
+            out.append(slave.getReal([vr["y"], vr["y_mean"]]))
+        slave.freeInstance()
+        rows.append(out)
+    assert rows[0] == rows[1]
+
+
+def test_equals_the_twin_in_libcosim_and_ecos(players):
+    native, twin = players["time-optimal"]
+    reference_rows = run_fmpy(twin, [{}] * 300, 1e-5, OUTPUTS)
+    for run in (run_libcosim, run_ecos):
+        np.testing.assert_allclose(run(native, [{}] * 300, 1e-5, OUTPUTS), reference_rows, rtol=0, atol=1e-12 * 11)
+
+
+def test_equals_the_twin_in_the_c_host_with_drifting_time_and_exit_handler_teardown(players, c_host, tmp_path):
+    from c_host import fmu_arguments, host_rows, run_host
+
+    native, twin = players["linear"]
+    csv = tmp_path / "both.csv"
+    result = run_host(c_host, [fmu_arguments(twin, tmp_path / "twin"), fmu_arguments(native, tmp_path / "native")],
+                      "--stop", 1.0, "--step", 1e-3, "--teardown", "atexit", "--csv", csv)
+    assert result.returncode == 0, result.stderr[-3000:]
+    rows = host_rows(csv)
+    assert np.array_equal(rows[(0, 0, 0)], rows[(0, 1, 0)]) and len(rows[(0, 0, 0)]) >= 1000
+
+
+def test_another_table_is_refused_with_a_message(players, capfd):
+    from fmpy.fmi1 import FMICallException
+
+    native, _ = players["linear"]
+    slave, vr = configured(native, instance_name="bad")
+    with pytest.raises(FMICallException):
+        slave.setString([vr["table"]], [LINEAR.replace("0.8", "0.9")])
+    slave.freeInstance()
+    assert "table is the signal table this native FMU was built with" in capfd.readouterr().out
+
+
+def test_a_table_larger_than_the_bound_is_refused_before_any_c_is_written(tmp_path, monkeypatch):
+    monkeypatch.setattr(reference, "MAX_TABLE_TIMES", 3)
+    with pytest.raises(ValueError, match=r"the table has 4 distinct times, more than the 3 a native ReferencePlayer holds"):
+        build_native_reference(tmp_path / "Big.fmu", table=LINEAR)
+    assert not (tmp_path / "Big.fmu").exists()
+
+
+def test_the_c_host_on_linux64_win64_and_aarch64_gives_the_same_numbers(players, tmp_path):
+    from fmpy import read_model_description
+    from test_native_aarch64 import AARCH64, ARM_ROOT, QEMU
+    from test_native_aarch64 import missing_tools as arm_missing
+    from test_native_win64 import MINGW, run_wine
+    from test_native_win64 import missing_tools as wine_missing
+
+    reason = " ".join(filter(None, (arm_missing(), wine_missing())))
+    if reason:
+        pytest.skip(reason)
+    native, _ = players["linear"]
+    md = read_model_description(str(native))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    programs = {"linux64": tmp_path / "fmu_host", "aarch64-linux": tmp_path / "fmu_host_arm",
+                "win64": tmp_path / "fmu_host.exe"}
+    for compiler, program, extra in (("gcc", programs["linux64"], ["-ldl"]), (AARCH64, programs["aarch64-linux"], ["-ldl"]),
+                                     (MINGW, programs["win64"], ["-static-libgcc"])):
+        subprocess.run([compiler, "-O2", "-std=c99", "-I", str(HEADERS), str(HOST), "-o", str(program), *extra], check=True)
+    outputs = {}
+    for platform, program in programs.items():
+        unzipped = tmp_path / platform
+        zipfile.ZipFile(native).extractall(unzipped)
+        library = str(unzipped / "binaries" / platform / f"ReferencePlayer{'.dll' if platform == 'win64' else '.so'}")
+        windows = (lambda path: "Z:" + str(path).replace("/", "\\")) if platform == "win64" else str
+        plan = tmp_path / f"plan_{platform}.txt"
+        plan.write_text(f"fmu {windows(library)} {md.guid}\noutput {vr['y']}\noutput {vr['y_mean']}\nrun 1000 0.001\n")
+        if platform == "win64":
+            completed = run_wine(program, windows(plan), tmp_path)
+        else:
+            command = [QEMU, "-L", ARM_ROOT] if platform == "aarch64-linux" else []
+            completed = subprocess.run([*command, str(program), str(plan)], capture_output=True, text=True, timeout=300)
+        assert completed.returncode == 0, (platform, completed.stderr[-2000:])
+        outputs[platform] = np.array(completed.stdout.split(), dtype=float)
+    assert outputs["linux64"].size == 2000 and np.ptp(outputs["linux64"]) > 2
+    for platform in ("aarch64-linux", "win64"):
+        np.testing.assert_allclose(outputs[platform], outputs["linux64"], rtol=0, atol=1e-12 * 2, err_msg=platform)
+
+
+VALGRIND_DRIVER = r"""
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include "fmi2Functions.h"
+#include "table_model.h"
+
+static int errors_logged = 0;
+
+static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status, fmi2String category,
+                   fmi2String message, ...) {
+    (void)env; (void)name; (void)category; (void)message;
+    if (status == fmi2Error) errors_logged++;
+}
+
+#define CHECK(call) do { if ((call) != fmi2OK) { fprintf(stderr, "failed: %s\n", #call); return 1; } } while (0)
+#define REFUSED(call) do { int before = errors_logged; \
+    if ((call) != fmi2Error || errors_logged != before + 1) { fprintf(stderr, "not refused: %s\n", #call); return 1; } \
+    } while (0)
+
+int main(void) {
+    const fmi2CallbackFunctions callbacks = {logger, calloc, free, NULL, NULL};
+    const fmi2ValueReference outputs[2] = {0, 1}, table = 2;
+    double out[2], t = 0.0;
+    fmi2Component c = fmi2Instantiate("c", fmi2CoSimulation, table_model.guid, "", &callbacks, fmi2False, fmi2True);
+    if (c == NULL) return 1;
+    CHECK(fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0));
+    CHECK(fmi2EnterInitializationMode(c));
+    const fmi2String same = table_model.table_text, other = "{}";
+    CHECK(fmi2SetString(c, &table, 1, &same));
+    REFUSED(fmi2SetString(c, &table, 1, &other));
+    CHECK(fmi2Reset(c));
+    CHECK(fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0));
+    CHECK(fmi2EnterInitializationMode(c));
+    CHECK(fmi2ExitInitializationMode(c));
+    fmi2FMUstate state = NULL;
+    for (int k = 0; k < 500; k++) {
+        const double h = k % 5 == 0 ? 1e-16 : 3e-3;
+        CHECK(fmi2DoStep(c, t, h, fmi2True));
+        t += h;
+        CHECK(fmi2GetReal(c, outputs, 2, out));
+        if (k == 100) CHECK(fmi2GetFMUstate(c, &state));
+    }
+    fmi2String text = NULL;
+    CHECK(fmi2GetString(c, &table, 1, &text));
+    if (strcmp(text, table_model.table_text) != 0) return 1;
+    size_t size = 0;
+    CHECK(fmi2SerializedFMUstateSize(c, state, &size));
+    fmi2Byte *bytes = malloc(size);
+    CHECK(fmi2SerializeFMUstate(c, state, bytes, size));
+    fmi2FMUstate copy = NULL;
+    CHECK(fmi2DeSerializeFMUstate(c, bytes, size, &copy));
+    free(bytes);
+    CHECK(fmi2SetFMUstate(c, copy));
+    CHECK(fmi2FreeFMUstate(c, &copy));
+    CHECK(fmi2FreeFMUstate(c, &state));
+    CHECK(fmi2Terminate(c));
+    fmi2FreeInstance(c);
+    printf("ok %g\n", out[1]);
+    return 0;
+}
+"""
+
+
+@pytest.mark.skipif(shutil.which("valgrind") is None or shutil.which("gcc") is None, reason="needs valgrind and gcc")
+def test_valgrind_finds_no_invalid_access_and_no_leak(players, tmp_path):
+    from test_plantgen_valgrind import run_driver_under_valgrind
+
+    run_driver_under_valgrind(players["time-optimal"][0], VALGRIND_DRIVER, tmp_path)
