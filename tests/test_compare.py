@@ -142,3 +142,23 @@ def test_cli_compare_refuses_bad_input(cache, capsys, argv, message):
         main(["compare", str(MODEL), "--fmus", str(cache), *argv])
     assert exit_.value.code == 2
     assert message in capsys.readouterr().err
+
+
+def test_native_twins_print_the_demos_table_to_its_printed_digits(runs, cache, capsys):
+    """Every command FMU as its native C twin (shapefmu compare --native): the same table."""
+    from shapefmu.cli import main
+
+    candidates = [run.name for run in runs.runs]
+    argv = ["compare", str(MODEL), "--distance", str(X), "--fmus", str(cache), "--native"]
+    for name in candidates:
+        argv += ["--candidate", name]
+    assert main(argv) == 0
+    printed = capsys.readouterr().out.strip()
+    assert printed == runs.table().strip()
+    import zipfile
+
+    built = [path for path in (Path(cache) / "native").iterdir() if path.suffix == ".fmu"]
+    models = {zipfile.ZipFile(path).read("sources/buildDescription.xml").decode().split('modelIdentifier="')[1].split('"')[0]
+              for path in built}
+    assert models == {"ReferencePlayer", "Shaper", "STOSController", "EKFTuner"}  # every command FMU, native
+    assert not any("resources/slavemodule.txt" in zipfile.ZipFile(path).namelist() for path in built)

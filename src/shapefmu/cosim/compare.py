@@ -163,12 +163,12 @@ class FMUCache:
             file_name = file_name.replace(".fmu", f"_{hashlib.sha256(baked.encode()).hexdigest()[:12]}.fmu")
             fingerprint += baked
         path = self._cached(file_name, fingerprint, lambda path: build(name, path, **start_values))
-        self._names[path] = name
+        self._names[path.resolve()] = name
         return path
 
     def model_of(self, fmu: Path) -> str | None:
         """The model name of a slave FMU this cache built, None for any other FMU (a plant)."""
-        return self._names.get(fmu)
+        return self._names.get(Path(fmu).resolve())
 
     def plant(self, plant) -> Path:
         """The measured plant FMU (``measured_plant``) of a Plant or model file, e.g. DiskDriveMeasured.fmu."""
