@@ -20,6 +20,7 @@ TWINS = {
     "EKFTuner": ("shapefmu.fmi.native.ekf_tuner", "build_native_ekf_tuner"),
     "STOSController": ("shapefmu.fmi.native.stos", "build_native_stos"),
     "ReferencePlayer": ("shapefmu.fmi.native.reference", "build_native_reference"),
+    "ProfileGenerator": ("shapefmu.fmi.native.profiles", "build_native_profile"),
 }
 
 
