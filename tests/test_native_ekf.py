@@ -327,27 +327,3 @@ def test_valgrind_finds_no_invalid_access_and_no_leak(native_ekf, tmp_path):
     from test_plantgen_valgrind import run_driver_under_valgrind
 
     run_driver_under_valgrind(native_ekf, VALGRIND_DRIVER, tmp_path)
-
-
-def test_the_command_line_builds_it_and_every_twin(tmp_path, monkeypatch):
-    from fmpy import read_model_description
-    from hostile_support import guarded
-
-    from shapefmu.fmi import native
-    from shapefmu.fmi.native.twins import TWINS
-
-    out = tmp_path / "Tuner.fmu"
-    code, text, err = guarded(["build", "ekf-tuner", "--native", "--kind", "mzv", "--omega0", "50", "--ts", "2e-3",
-                               "-o", out], seconds=120)
-    assert code == 0, err
-    starts = {v.name: v.start for v in read_model_description(str(out)).modelVariables}
-    assert (starts["kind"], float(starts["omega0"]), float(starts["Ts"])) == ("mzv", 50.0, 2e-3)
-    assert "sources/ekf_tuner_fmi2.c" in zipfile.ZipFile(out).namelist()
-    code, _, err = guarded(["build", "ekf-tuner", "--native", "--omega0", "-5", "-o", out])
-    assert code == 2 and err.count("\n") == 1 and "omega0 must be > 0" in err, err
-    monkeypatch.setattr(native, "build_all", lambda models, folder: [])  # the plants have their own tests
-    code, text, err = guarded(["build", "--native", "-o", tmp_path / "all"], seconds=300)
-    assert code == 0, err
-    for name in TWINS:
-        names = zipfile.ZipFile(tmp_path / "all" / f"{name}.fmu").namelist()
-        assert any(n.startswith("sources/") for n in names) and not any("pythonfmu" in n for n in names), name

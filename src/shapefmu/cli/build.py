@@ -5,6 +5,8 @@
     shapefmu build reference solution.json [--interpolation hold|linear] -o fmus/TimeOptimal.fmu
     shapefmu build shape-filter --kind hanning --mode 10:0.05 --order 2 [--ts S] -o fmus/HanningFilter.fmu
     shapefmu build ekf-tuner [--kind zvd] [--omega0 RAD_S] [--ts S] [--amplitude A] [--retune-fraction F] -o ...
+    shapefmu build stos-controller [--param NAME=VALUE ...] -o ...; shapefmu build profile [--param ...] -o ...
+        (any parameter of the FMU, typed as the FMU declares it, e.g. --param kind=zvd --param f[1]=40)
     shapefmu build shaper --native ...; shape-filter --native; ekf-tuner --native; build --native (every
         FMU that has one): the native C twin (no Python on the host; linux64, win64 and aarch64-linux
         binaries; shapefmu.fmi.native.twins)
@@ -90,6 +92,11 @@ def _add_reference(parser):
                         help="FMU file (default fmus/ReferencePlayer.fmu)")
 
 
+def _add_reference_native(parser):
+    _add_reference(parser)
+    _add_native(parser)
+
+
 def _build_reference(args):
     import json
 
@@ -100,7 +107,7 @@ def _build_reference(args):
         text = Path(args.table).read_text(encoding="utf-8")  # keep the solution's own fields
     else:
         text = json.dumps(table.to_dict())
-    return [build_fmu("ReferencePlayer", Path(args.out), table=text)]
+    return [_builder(args)("ReferencePlayer", Path(args.out), table=text)]
 
 
 def _add_shape_filter(parser):
@@ -152,13 +159,52 @@ def _build_ekf_tuner(args):
     return [_builder(args)("EKFTuner", Path(args.out), **starts)]
 
 
+def _parameters(name: str, items) -> dict:
+    """--param NAME=VALUE items as the FMU ``name``'s start values, typed as it declares them."""
+    from shapefmu.fmi.python.builder import slave_class
+
+    declared = {v.name: v for v in slave_class(name)(instance_name="cli").variables if v.causality == "parameter"}
+    starts = {}
+    for item in items:
+        key, sep, text = item.partition("=")
+        if not sep or key not in declared:
+            raise ValueError(f"--param must be NAME=VALUE with NAME a parameter of {name} ({', '.join(declared)}), "
+                             f"got {item!r}")
+        kind = declared[key].type
+        try:
+            starts[key] = {"Real": float, "Integer": int, "String": str}[kind](text) if kind != "Boolean" else \
+                {"true": True, "false": False}[text.lower()]
+        except (KeyError, ValueError):
+            article = "an" if kind == "Integer" else "a"
+            raise ValueError(f"--param {key} is {article} {kind} parameter of {name}, got {text!r}") from None
+    return starts
+
+
+def _parameter_target(name: str, default: str):
+    def add(parser):
+        _add_native(parser)
+        parser.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
+                            help=f"a parameter of the {name} FMU baked in as its start value; repeat")
+        parser.add_argument("-o", "--out", default=f"fmus/{default}.fmu", type=output_file(".fmu", what="FMU"),
+                            help=f"FMU file (default fmus/{default}.fmu)")
+
+    def build(args):
+        return [_builder(args)(name, Path(args.out), **_parameters(name, args.param))]
+
+    return add, build
+
+
 TARGETS = {
     "all": ("every FMU with its default parameters", _add_all, _build_all),
     "shaper": ("the Shaper FMU with a design baked in", _add_shaper, _build_shaper),
-    "reference": ("the ReferencePlayer FMU playing a signal table", _add_reference, _build_reference),
+    "reference": ("the ReferencePlayer FMU playing a signal table", _add_reference_native, _build_reference),
     "shape-filter": ("the ShapeFilter FMU with a sampled design baked in", _add_shape_filter, _build_shape_filter),
     "ekf-tuner": ("the EKFTuner FMU (paper 001): estimates the vibration's mode, shapes for it", _add_ekf_tuner,
                   _build_ekf_tuner),
+    "stos-controller": ("the STOSController FMU (paper 002): shaped time-optimal closed loop",
+                        *_parameter_target("STOSController", "STOSController")),
+    "profile": ("the ProfileGenerator FMU: twin-pulse, time-frequency or shaped bang-bang moves",
+                *_parameter_target("ProfileGenerator", "ProfileGenerator")),
 }
 
 
