@@ -2,7 +2,7 @@
  * Compiled and run by benchmarks/native_loop.py for benchmarks/fmu_step.py and benchmarks/cosim.py.
  *
  * Usage: fmu_loop STEPS H FACTOR LIB GUID IN OUT [LIB2 GUID2 IN2 OUT2]
- *   one FMU:  per step set IN = sin-like command, doStep, get OUT
+ *   one FMU:  per step set IN = sin-like command (IN "-": an FMU without inputs), doStep, get OUT
  *   two FMUs: FMU 1's IN held at 1 (a step command); per step set FMU 2's IN2 = FACTOR * (FMU 1's
  *             OUT read after the last step), doStep both, get OUT; every 100th step also get FMU 2's
  *             OUT2 (what a master records)
@@ -23,6 +23,7 @@ typedef struct {
     fmi2DoStepTYPE *step;
     fmi2FreeInstanceTYPE *free_instance;
     fmi2ValueReference in, out;
+    int has_input;
 } Fmu;
 
 static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status, fmi2String category,
@@ -44,6 +45,7 @@ static int open_fmu(Fmu *fmu, char **argv) {
     fmu->get = (fmi2GetRealTYPE *)dlsym(library, "fmi2GetReal");
     fmu->step = (fmi2DoStepTYPE *)dlsym(library, "fmi2DoStep");
     fmu->free_instance = (fmi2FreeInstanceTYPE *)dlsym(library, "fmi2FreeInstance");
+    fmu->has_input = argv[2][0] != '-';
     fmu->in = (fmi2ValueReference)atol(argv[2]);
     fmu->out = (fmi2ValueReference)atol(argv[3]);
     fmu->c = instantiate("loop", fmi2CoSimulation, argv[1], "", &callbacks, fmi2False, fmi2False);
@@ -76,7 +78,7 @@ int main(int argc, char **argv) {
     if (argc == 8) {
         for (k = 0; k < steps; k++) {
             const double u = (double)((k * 7919) % 200) / 100.0 - 1.0;
-            CALL(a.set(a.c, &a.in, 1, &u));
+            if (a.has_input) CALL(a.set(a.c, &a.in, 1, &u));
             CALL(a.step(a.c, (double)k * h, h, fmi2True));
             CALL(a.get(a.c, &a.out, 1, &y));
         }

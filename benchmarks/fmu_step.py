@@ -5,8 +5,9 @@ Then the native C Shaper and ShapeFilter (``shapefmu build ... --native``) besid
 FMU (the generic FMI 2.0 layer with a model part that does nothing, their floor), each stepped by
 the hand-written C loop of benchmarks/fmu_loop.c (set u, doStep, get y: nanoseconds per step, the
 FMU's own cost) and through fmpy. Goal: the native Shaper's step <= 1.5x the empty native FMU's;
-the native EKF tuner's (the 4-state EKF and the shaper every sample, its vibration input driven)
-<= 2x.
+the native EKF tuner's (the 4-state EKF and the shaper every sample, its vibration input driven),
+STOS controller's (the law with sub-sample switching and the settle hand-over, its position input
+driven), profile generator's and reference player's <= 2x.
 
 Each FMU is stepped N times with fmpy's low-level API (setReal u, doStep, getReal y: what a master
 does per step); the kernel is StreamingShaper.step on the same ZVD design and on the ShapeFilter's
@@ -27,12 +28,17 @@ from native_loop import build_empty_native, c_loop_seconds
 
 from shapefmu.fmi import build_fmu
 from shapefmu.fmi.native.ekf_tuner import build_native_ekf_tuner
+from shapefmu.fmi.native.profiles import build_native_profile
+from shapefmu.fmi.native.reference import build_native_reference
+from shapefmu.fmi.native.stos import build_native_stos
 from shapefmu.fmi.native.sampled import build_native_fmu
 from shapefmu.runtime.impulse_formulas import zv_dn
 from shapefmu.runtime.shaper_filter import StreamingShaper
 from shapefmu.runtime.window_filters import hanning_filter
 
 N = 20000
+# The settle law of tests/test_fmu_stos.py (the disk drive's hand-over region and gains).
+STOS_SETTLE = {"kp": 2.75e6, "kd": 27.5, "ki": 1e8, "x_enter": 2e-6, "v_enter": 0.2, "x_exit": 4e-6, "v_exit": 0.4}
 H = 1e-4
 C_STEPS = 1_000_000
 REPEATS = 9
@@ -64,10 +70,11 @@ def per_step_fmu(path, input_name="u", output_name="y"):
     fmu.setupExperiment(startTime=0.0)
     fmu.enterInitializationMode()
     fmu.exitInitializationMode()
-    u, y = [vr[input_name]], [vr[output_name]]
+    u, y = ([vr[input_name]] if input_name else []), [vr[output_name]]
     start = time.perf_counter()
     for k in range(N):
-        fmu.setReal(u, [math.sin(1e-3 * k)])
+        if u:
+            fmu.setReal(u, [math.sin(1e-3 * k)])
         fmu.doStep(k * H, H)
         fmu.getReal(y)
     elapsed = time.perf_counter() - start
@@ -118,6 +125,10 @@ def native():
                                                                   kind="hanning", f=100.0, order=2, Ts=H), "u", "y", None),
             "native EKFTuner (EKF + ZVD)": (build_native_ekf_tuner(temp / "NativeEKF.fmu", Ts=H, omega0=2 * math.pi * 100.0),
                                             "vibration", "omega_est", 2.0),
+            "native STOSController (settle)": (build_native_stos(temp / "NativeSTOS.fmu", Ts=H, settle=True, **STOS_SETTLE),
+                                               "x_r", "u", 2.0),
+            "native ProfileGenerator (BC:TZ)": (build_native_profile(temp / "NativeProfile.fmu"), "start", "position", 2.0),
+            "native ReferencePlayer": (build_native_reference(temp / "NativeReference.fmu"), None, "y_mean", 2.0),
         }
         # The FMUs take turns, so that a burst of load on a shared machine does not decide a ratio.
         runs = [{name: c_loop_seconds(C_STEPS, H, [fmu[:3]]) for name, fmu in fmus.items()} for _ in range(REPEATS)]

@@ -88,17 +88,17 @@ def _program() -> Path:
     return _PROGRAM["loop"]
 
 
-def _arguments(fmu: Path, input_name: str, output_name: str) -> list[str]:
+def _arguments(fmu: Path, input_name: str | None, output_name: str) -> list[str]:
     md = read_model_description(str(fmu))
     folder = Path(tempfile.mkdtemp(prefix="shapefmu-loop-fmu-"))
     zipfile.ZipFile(fmu).extractall(folder)
     library = folder / "binaries" / "linux64" / f"{md.coSimulation.modelIdentifier}.so"
     vr = {v.name: v.valueReference for v in md.modelVariables}
-    return [str(library), md.guid, str(vr[input_name]), str(vr[output_name])]
+    return [str(library), md.guid, "-" if input_name is None else str(vr[input_name]), str(vr[output_name])]
 
 
 def c_loop_seconds(steps: int, h: float, fmus: list[tuple[Path, str, str]], factor: float = 1.0) -> float:
-    """Seconds of fmu_loop.c over ``fmus`` [(path, input, output)], one FMU or a chain of two."""
+    """Seconds of fmu_loop.c over ``fmus`` [(path, input or None, output)], one FMU or a chain of two."""
     arguments = [a for fmu in fmus for a in _arguments(*fmu)]
     completed = subprocess.run([str(_program()), str(steps), repr(h), repr(factor), *arguments],
                                capture_output=True, text=True, check=True)
