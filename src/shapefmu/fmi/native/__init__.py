@@ -1,5 +1,7 @@
-"""Native C FMUs: the generic FMI 2.0 layer (``c/``), the plant-FMU generator and the native
-Shaper and ShapeFilter FMUs (``sampled.build_native_fmu``, see that module).
+"""Native C FMUs: the generic FMI 2.0 layer (``c/``), the plant-FMU generator and the native C
+twins of the pythonfmu FMUs (``twins``: the Shaper and ShapeFilter of ``sampled``, the EKF tuner of
+``ekf_tuner``, the STOS controller of ``stos``, the profile generator of ``profiles`` and the
+reference player of ``reference``, each packaged by ``kernel_fmu``).
 
 It may import the design layer (``shapefmu.plants``) and CasADi for code generation; the C it
 emits and compiles needs nothing but a C compiler. The generator writes FMI 2.0 Model Exchange +
@@ -16,8 +18,8 @@ derivatives from the Jacobian) and Co-Simulation (exact zero-order-hold step for
 the matrix exponential computed in C when the step size or a parameter changes; fixed-substep RK4
 for nonlinear plants; variable communication steps). It carries its C sources and
 ``sources/buildDescription.xml``, so fmpy (``fmpy.build.build_platform_binary``) or any tool can
-recompile it, and ``binaries/linux64`` and ``binaries/win64`` compiled here (``compile.py``: gcc,
-and the mingw-w64 cross compiler where it is installed).
+recompile it, and ``binaries/linux64``, ``binaries/win64`` and ``binaries/aarch64-linux`` compiled
+here (``compile.py``: gcc, and the mingw-w64 and aarch64 cross compilers where they are installed).
 
 Structure (as the FMI Reference FMUs): ``c/fmi2_layer*.c`` is the one hand-written, tested generic
 FMI 2.0 layer shared by every native FMU (``c/fmi2_model.h`` is its model interface);
