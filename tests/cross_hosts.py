@@ -70,3 +70,42 @@ def assert_same_outputs(every, reference_lines, lines, what):
         assert reference.size > 100 and np.all(np.isfinite(reference)), name
         scale = max(1.0, float(np.max(np.abs(reference))))
         np.testing.assert_allclose(actual, reference, rtol=0, atol=1e-12 * scale, err_msg=f"{what}: {name}")
+
+
+def run_on_every_platform(fmu, plan_body: str, folder) -> dict:
+    """tests/fmu_host.c on linux64, on aarch64-linux under qemu and on win64 under Wine, each
+    loading that platform's binary of ``fmu`` and running ``plan_body`` (the plan's lines after its
+    ``fmu`` line): {platform: the printed numbers}. Skips, saying why, without the cross tools."""
+    import subprocess
+
+    import numpy as np
+    import pytest
+    from test_native_aarch64 import AARCH64, ARM_ROOT, QEMU
+    from test_native_aarch64 import missing_tools as arm_missing
+    from test_native_win64 import MINGW, run_wine
+    from test_native_win64 import missing_tools as wine_missing
+
+    reason = " ".join(filter(None, (arm_missing(), wine_missing())))
+    if reason:
+        pytest.skip(reason)
+    md = read_model_description(str(fmu))
+    identifier = md.coSimulation.modelIdentifier
+    hosts = {"linux64": ("gcc", "fmu_host", ["-ldl"], []), "aarch64-linux": (AARCH64, "fmu_host_arm", ["-ldl"], [QEMU, "-L", ARM_ROOT]),
+             "win64": (MINGW, "fmu_host.exe", ["-static-libgcc"], None)}
+    outputs = {}
+    for platform, (compiler, program, flags, runner) in hosts.items():
+        host = folder / program
+        subprocess.run([compiler, "-O2", "-std=c99", "-I", str(HEADERS), str(HOST), "-o", str(host), *flags], check=True)
+        unzipped = folder / f"{fmu.stem}_{platform}"
+        zipfile.ZipFile(fmu).extractall(unzipped)
+        library = unzipped / "binaries" / platform / f"{identifier}{'.dll' if platform == 'win64' else '.so'}"
+        windows = (lambda path: "Z:" + str(path).replace("/", "\\")) if platform == "win64" else str  # Wine's Z:
+        plan = folder / f"plan_{fmu.stem}_{platform}.txt"
+        plan.write_text(f"fmu {windows(library)} {md.guid}\n{plan_body}")
+        if runner is None:
+            completed = run_wine(host, windows(plan), folder)
+        else:
+            completed = subprocess.run([*runner, str(host), str(plan)], capture_output=True, text=True, timeout=300)
+        assert completed.returncode == 0, (platform, completed.stderr[-2000:])
+        outputs[platform] = np.array(completed.stdout.split(), dtype=float)
+    return outputs

@@ -18,7 +18,7 @@ import sys
 import xml.etree.ElementTree as ET
 from collections import Counter
 from pathlib import Path
-from ctypes import POINTER, byref, c_bool, c_char_p, c_double, c_int, c_int64, c_size_t, c_uint, c_void_p
+from ctypes import byref, c_bool, c_char_p, c_double, c_int, c_int64, c_size_t, c_uint, c_void_p
 
 NUMBERS = [0.0, 1e-3, 1.0, -1.0, 0.5, 2e3, float("nan"), float("inf"), -float("inf"), 1e300, -1e300, 1e-300, 5e-324]
 STRINGS = [b"", b"zvd", b"simultaneous", b"\xff\xfe\xfd", b"\xc3\x28", b"x" * 5000, b"ei"]

@@ -10,16 +10,16 @@ logged message, and valgrind finds nothing.
 
 import math
 import shutil
-import subprocess
 import zipfile
 
 import numpy as np
 import pytest
-from cross_hosts import HEADERS, HOST
+from cross_hosts import run_on_every_platform
 from fixtures_fmi import EKF_STARTS
 from fmpy.validation import validate_fmu
 from fmu_drivers import configured, fmpy_slave, initialised, set_start_values, variable_references
 from fmu_signal_drivers import run_ecos, run_fmpy, run_libcosim
+from native_drivers import twin_driver
 from test_fmu_ekf import OMEGA, OUTPUTS, _signals
 
 from shapefmu.fmi.native.ekf_tuner import build_native_ekf_tuner
@@ -177,84 +177,20 @@ def test_a_non_finite_input_is_refused_when_set(native_ekf, capfd):
 
 # ---------------------------------------------------------------- C hosts (t += h) on three platforms
 
-def _plan(fmu, folder, platform, steps):
-    """A tests/fmu_host.c plan driving the vibration with the host's own sequence (u left at 0);
-    returns the argument the platform's host takes."""
+def test_the_c_host_on_linux64_win64_and_aarch64_gives_the_same_numbers(native_ekf, tmp_path):
+    """The host drives the vibration with its own sequence (u left at 0)."""
     from fmpy import read_model_description
 
-    md = read_model_description(str(fmu))
-    unzipped = folder / f"unzipped_{platform}"
-    zipfile.ZipFile(fmu).extractall(unzipped)
-    library = str(unzipped / "binaries" / platform / f"EKFTuner{'.dll' if platform == 'win64' else '.so'}")
-    vr = {v.name: v.valueReference for v in md.modelVariables}
-    plan = folder / f"plan_{platform}.txt"
-    windows = (lambda path: "Z:" + str(path).replace("/", "\\")) if platform == "win64" else str  # Wine's Z: drive
-    plan.write_text("\n".join([f"fmu {windows(library)} {md.guid}", f"input {vr['vibration']} 0.5",
-                               *[f"output {vr[name]}" for name in OUTPUTS], f"run {steps} {H!r}"]) + "\n")
-    return windows(plan)
-
-
-def _rows(completed, steps):
-    assert completed.returncode == 0, completed.stderr[-2000:]
-    return np.array(completed.stdout.split(), dtype=float).reshape(steps, len(OUTPUTS))
-
-
-def test_the_c_host_on_linux64_win64_and_aarch64_gives_the_same_numbers(native_ekf, tmp_path):
-    from test_native_aarch64 import AARCH64, ARM_ROOT, QEMU
-    from test_native_aarch64 import missing_tools as arm_missing
-    from test_native_win64 import MINGW, run_wine
-    from test_native_win64 import missing_tools as wine_missing
-
-    reason = " ".join(filter(None, (arm_missing(), wine_missing())))
-    if reason:
-        pytest.skip(reason)
-    steps = 600
-    programs = {"linux64": tmp_path / "fmu_host", "aarch64-linux": tmp_path / "fmu_host_arm",
-                "win64": tmp_path / "fmu_host.exe"}
-    for compiler, program, extra in (("gcc", programs["linux64"], ["-ldl"]),
-                                     (AARCH64, programs["aarch64-linux"], ["-ldl"]),
-                                     (MINGW, programs["win64"], ["-static-libgcc"])):
-        subprocess.run([compiler, "-O2", "-std=c99", "-I", str(HEADERS), str(HOST), "-o", str(program), *extra],
-                       check=True)
-    plans = {platform: _plan(native_ekf, tmp_path, platform, steps) for platform in programs}
-    reference = _rows(subprocess.run([str(programs["linux64"]), plans["linux64"]], capture_output=True, text=True,
-                                     timeout=120), steps)
+    vr = {v.name: v.valueReference for v in read_model_description(str(native_ekf)).modelVariables}
+    plan = f"input {vr['vibration']} 0.5\n" + "".join(f"output {vr[name]}\n" for name in OUTPUTS) + f"run 600 {H!r}\n"
+    outputs = run_on_every_platform(native_ekf, plan, tmp_path)
+    reference = outputs["linux64"].reshape(600, len(OUTPUTS))
     assert np.ptp(reference[:, 1]) > 0  # the EKF moved
-    arm = subprocess.run([QEMU, "-L", ARM_ROOT, str(programs["aarch64-linux"]), plans["aarch64-linux"]],
-                         capture_output=True, text=True, timeout=300)
-    assert_same(_rows(arm, steps), reference)
-    assert_same(_rows(run_wine(programs["win64"], plans["win64"], tmp_path), steps), reference)
+    for platform in ("aarch64-linux", "win64"):
+        assert_same(outputs[platform].reshape(600, len(OUTPUTS)), reference)
 
 
-VALGRIND_DRIVER = r"""
-#include <math.h>
-#include <stdio.h>
-#include <stdlib.h>
-#include <string.h>
-#include "fmi2Functions.h"
-#include "ekf_tuner_model.h"
-
-static int errors_logged = 0;
-
-static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status, fmi2String category,
-                   fmi2String message, ...) {
-    (void)env; (void)name; (void)category; (void)message;
-    if (status == fmi2Error) errors_logged++;
-}
-
-static fmi2ValueReference vr_of(const char *name) {
-    for (size_t vr = 0; vr < ekf_tuner_model.n_real + ekf_tuner_model.n_integer + ekf_tuner_model.n_boolean
-                             + ekf_tuner_model.n_string; vr++)
-        if (strcmp(ekf_tuner_model.variables[vr].name, name) == 0) return (fmi2ValueReference)vr;
-    fprintf(stderr, "no variable %s\n", name);
-    exit(1);
-}
-
-#define CHECK(call) do { if ((call) != fmi2OK) { fprintf(stderr, "failed: %s\n", #call); return 1; } } while (0)
-#define REFUSED(call) do { int before = errors_logged; \
-    if ((call) != fmi2Error || errors_logged != before + 1) { fprintf(stderr, "not refused: %s\n", #call); return 1; } \
-    } while (0)
-
+VALGRIND_DRIVER = twin_driver("ekf_tuner_model.h", "ekf_tuner_model", r"""
 /* A 10 Hz ring-down at Ts = 1 ms and a command that moves and rests: the EKF converges, a shaper
  * is designed and switched in, so every buffer is used; steps of every kind. */
 static int run(fmi2Component c, double *t, int steps, double *out) {
@@ -319,7 +255,7 @@ int main(void) {
     printf("ok %g\n", out[0]);
     return 0;
 }
-"""
+""")
 
 
 @pytest.mark.skipif(shutil.which("valgrind") is None or shutil.which("gcc") is None, reason="needs valgrind and gcc")

@@ -9,15 +9,14 @@ parameters refuse another value, t_start may change, and valgrind finds nothing.
 """
 
 import shutil
-import subprocess
-import zipfile
 
 import numpy as np
 import pytest
-from cross_hosts import HEADERS, HOST
+from cross_hosts import run_on_every_platform
 from fmpy.validation import validate_fmu
 from fmu_drivers import fmpy_slave, initialised, set_start_values, variable_references
 from fmu_signal_drivers import run_ecos, run_fmpy, run_libcosim
+from native_drivers import twin_driver
 
 from shapefmu.fmi import build_fmu
 from shapefmu.fmi.native import profiles
@@ -133,78 +132,25 @@ def test_a_move_larger_than_the_bound_is_refused_before_any_c_is_written(tmp_pat
 
 
 def test_the_c_host_on_linux64_win64_and_aarch64_gives_the_same_numbers(generators, tmp_path):
+    """The host's input sequence reaches 0.5 within a few steps: the start input starts the move."""
     from fmpy import read_model_description
-    from test_native_aarch64 import AARCH64, ARM_ROOT, QEMU
-    from test_native_aarch64 import missing_tools as arm_missing
-    from test_native_win64 import MINGW, run_wine
-    from test_native_win64 import missing_tools as wine_missing
 
-    reason = " ".join(filter(None, (arm_missing(), wine_missing())))
-    if reason:
-        pytest.skip(reason)
     native, _ = generators["time-frequency"]
-    md = read_model_description(str(native))
-    vr = {v.name: v.valueReference for v in md.modelVariables}
-    programs = {"linux64": tmp_path / "fmu_host", "aarch64-linux": tmp_path / "fmu_host_arm",
-                "win64": tmp_path / "fmu_host.exe"}
-    for compiler, program, extra in (("gcc", programs["linux64"], ["-ldl"]), (AARCH64, programs["aarch64-linux"], ["-ldl"]),
-                                     (MINGW, programs["win64"], ["-static-libgcc"])):
-        subprocess.run([compiler, "-O2", "-std=c99", "-I", str(HEADERS), str(HOST), "-o", str(program), *extra], check=True)
-    outputs = {}
-    for platform, program in programs.items():
-        unzipped = tmp_path / platform
-        zipfile.ZipFile(native).extractall(unzipped)
-        library = str(unzipped / "binaries" / platform / f"ProfileGenerator{'.dll' if platform == 'win64' else '.so'}")
-        windows = (lambda path: "Z:" + str(path).replace("/", "\\")) if platform == "win64" else str
-        plan = tmp_path / f"plan_{platform}.txt"
-        # the host's input sequence reaches 0.5 within a few steps: the start input starts the move
-        plan.write_text(f"fmu {windows(library)} {md.guid}\ninput {vr['start']} 1\n"
-                        + "".join(f"output {vr[n]}\n" for n in OUTPUTS) + "run 300 0.001\n")
-        if platform == "win64":
-            completed = run_wine(program, windows(plan), tmp_path)
-        else:
-            command = [QEMU, "-L", ARM_ROOT] if platform == "aarch64-linux" else []
-            completed = subprocess.run([*command, str(program), str(plan)], capture_output=True, text=True, timeout=300)
-        assert completed.returncode == 0, (platform, completed.stderr[-2000:])
-        outputs[platform] = np.array(completed.stdout.split(), dtype=float)
+    vr = {v.name: v.valueReference for v in read_model_description(str(native)).modelVariables}
+    plan = f"input {vr['start']} 1\n" + "".join(f"output {vr[n]}\n" for n in OUTPUTS) + "run 300 0.001\n"
+    outputs = run_on_every_platform(native, plan, tmp_path)
     assert outputs["linux64"].size == 900 and np.ptp(outputs["linux64"]) > 0
     for platform in ("aarch64-linux", "win64"):
         np.testing.assert_allclose(outputs[platform], outputs["linux64"], rtol=0, atol=1e-12 * 100, err_msg=platform)
 
 
-VALGRIND_DRIVER = r"""
-#include <stdio.h>
-#include <stdlib.h>
-#include <string.h>
-#include "fmi2Functions.h"
-#include "motion_model.h"
-
-static int errors_logged = 0;
-
-static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status, fmi2String category,
-                   fmi2String message, ...) {
-    (void)env; (void)name; (void)category; (void)message;
-    if (status == fmi2Error) errors_logged++;
-}
-
-static fmi2ValueReference vr_of(const char *name) {
-    for (size_t vr = 0; vr < motion_model.n_real + motion_model.n_integer + motion_model.n_boolean + motion_model.n_string; vr++)
-        if (strcmp(motion_model.variables[vr].name, name) == 0) return (fmi2ValueReference)vr;
-    fprintf(stderr, "no variable %s\n", name);
-    exit(1);
-}
-
-#define CHECK(call) do { if ((call) != fmi2OK) { fprintf(stderr, "failed: %s\n", #call); return 1; } } while (0)
-#define REFUSED(call) do { int before = errors_logged; \
-    if ((call) != fmi2Error || errors_logged != before + 1) { fprintf(stderr, "not refused: %s\n", #call); return 1; } \
-    } while (0)
-
+VALGRIND_DRIVER = twin_driver("motion_model.h", "motion_variables", r"""
 int main(void) {
     const fmi2CallbackFunctions callbacks = {logger, calloc, free, NULL, NULL};
     const fmi2ValueReference start = vr_of("start"), distance = vr_of("distance"), t_start = vr_of("t_start");
     const fmi2ValueReference outputs[3] = {vr_of("position"), vr_of("velocity"), vr_of("acceleration")};
     double out[3], t = 0.0, value;
-    fmi2Component c = fmi2Instantiate("c", fmi2CoSimulation, motion_model.guid, "", &callbacks, fmi2False, fmi2True);
+    fmi2Component c = fmi2Instantiate("c", fmi2CoSimulation, motion_variables.guid, "", &callbacks, fmi2False, fmi2True);
     if (c == NULL) return 1;
     CHECK(fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0));
     CHECK(fmi2EnterInitializationMode(c));
@@ -241,7 +187,7 @@ int main(void) {
     printf("ok %g\n", out[0]);
     return 0;
 }
-"""
+""")
 
 
 @pytest.mark.skipif(shutil.which("valgrind") is None or shutil.which("gcc") is None, reason="needs valgrind and gcc")

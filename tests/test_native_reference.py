@@ -10,15 +10,14 @@ build time, and valgrind finds nothing.
 
 import json
 import shutil
-import subprocess
-import zipfile
 
 import numpy as np
 import pytest
-from cross_hosts import HEADERS, HOST
+from cross_hosts import run_on_every_platform
 from fmpy.validation import validate_fmu
 from fmu_drivers import configured, initialised
 from fmu_signal_drivers import run_ecos, run_fmpy, run_libcosim
+from native_drivers import PRELUDE
 
 from shapefmu.fmi import build_fmu
 from shapefmu.fmi.native import reference
@@ -115,62 +114,16 @@ def test_a_table_larger_than_the_bound_is_refused_before_any_c_is_written(tmp_pa
 
 def test_the_c_host_on_linux64_win64_and_aarch64_gives_the_same_numbers(players, tmp_path):
     from fmpy import read_model_description
-    from test_native_aarch64 import AARCH64, ARM_ROOT, QEMU
-    from test_native_aarch64 import missing_tools as arm_missing
-    from test_native_win64 import MINGW, run_wine
-    from test_native_win64 import missing_tools as wine_missing
 
-    reason = " ".join(filter(None, (arm_missing(), wine_missing())))
-    if reason:
-        pytest.skip(reason)
     native, _ = players["linear"]
-    md = read_model_description(str(native))
-    vr = {v.name: v.valueReference for v in md.modelVariables}
-    programs = {"linux64": tmp_path / "fmu_host", "aarch64-linux": tmp_path / "fmu_host_arm",
-                "win64": tmp_path / "fmu_host.exe"}
-    for compiler, program, extra in (("gcc", programs["linux64"], ["-ldl"]), (AARCH64, programs["aarch64-linux"], ["-ldl"]),
-                                     (MINGW, programs["win64"], ["-static-libgcc"])):
-        subprocess.run([compiler, "-O2", "-std=c99", "-I", str(HEADERS), str(HOST), "-o", str(program), *extra], check=True)
-    outputs = {}
-    for platform, program in programs.items():
-        unzipped = tmp_path / platform
-        zipfile.ZipFile(native).extractall(unzipped)
-        library = str(unzipped / "binaries" / platform / f"ReferencePlayer{'.dll' if platform == 'win64' else '.so'}")
-        windows = (lambda path: "Z:" + str(path).replace("/", "\\")) if platform == "win64" else str
-        plan = tmp_path / f"plan_{platform}.txt"
-        plan.write_text(f"fmu {windows(library)} {md.guid}\noutput {vr['y']}\noutput {vr['y_mean']}\nrun 1000 0.001\n")
-        if platform == "win64":
-            completed = run_wine(program, windows(plan), tmp_path)
-        else:
-            command = [QEMU, "-L", ARM_ROOT] if platform == "aarch64-linux" else []
-            completed = subprocess.run([*command, str(program), str(plan)], capture_output=True, text=True, timeout=300)
-        assert completed.returncode == 0, (platform, completed.stderr[-2000:])
-        outputs[platform] = np.array(completed.stdout.split(), dtype=float)
+    vr = {v.name: v.valueReference for v in read_model_description(str(native)).modelVariables}
+    outputs = run_on_every_platform(native, f"output {vr['y']}\noutput {vr['y_mean']}\nrun 1000 0.001\n", tmp_path)
     assert outputs["linux64"].size == 2000 and np.ptp(outputs["linux64"]) > 2
     for platform in ("aarch64-linux", "win64"):
         np.testing.assert_allclose(outputs[platform], outputs["linux64"], rtol=0, atol=1e-12 * 2, err_msg=platform)
 
 
-VALGRIND_DRIVER = r"""
-#include <stdio.h>
-#include <stdlib.h>
-#include <string.h>
-#include "fmi2Functions.h"
-#include "table_model.h"
-
-static int errors_logged = 0;
-
-static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status, fmi2String category,
-                   fmi2String message, ...) {
-    (void)env; (void)name; (void)category; (void)message;
-    if (status == fmi2Error) errors_logged++;
-}
-
-#define CHECK(call) do { if ((call) != fmi2OK) { fprintf(stderr, "failed: %s\n", #call); return 1; } } while (0)
-#define REFUSED(call) do { int before = errors_logged; \
-    if ((call) != fmi2Error || errors_logged != before + 1) { fprintf(stderr, "not refused: %s\n", #call); return 1; } \
-    } while (0)
-
+VALGRIND_DRIVER = PRELUDE + '#include "table_model.h"\n' + r"""
 int main(void) {
     const fmi2CallbackFunctions callbacks = {logger, calloc, free, NULL, NULL};
     const fmi2ValueReference outputs[2] = {0, 1}, table = 2;

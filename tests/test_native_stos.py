@@ -9,18 +9,16 @@ restores exactly, the design parameters refuse another value than their build va
 valgrind finds nothing.
 """
 
-import math
 import shutil
-import subprocess
-import zipfile
 
 import numpy as np
 import pytest
-from cross_hosts import HEADERS, HOST
+from cross_hosts import run_on_every_platform
 from fixtures_fmi import STOS_STARTS
 from fmpy.validation import validate_fmu
 from fmu_drivers import fmpy_slave, initialised, set_start_values, variable_references
 from fmu_signal_drivers import run_ecos, run_fmpy, run_libcosim
+from native_drivers import twin_driver
 from test_fmu_stos import SETTLE, TARGET, TS, U, _fmu_loop
 
 from shapefmu.fmi import build_fmu
@@ -174,74 +172,20 @@ def test_ts_and_the_settle_law_may_change_before_initialisation_as_on_the_twin(t
 
 
 def test_the_c_host_on_linux64_win64_and_aarch64_gives_the_same_numbers(twins, tmp_path):
-    from test_native_aarch64 import AARCH64, ARM_ROOT, QEMU
-    from test_native_aarch64 import missing_tools as arm_missing
-    from test_native_win64 import MINGW, run_wine
-    from test_native_win64 import missing_tools as wine_missing
+    """With back EMF (the law's log1p and expm1 from each platform's own libm); the host drives the
+    position error with its own sequence (+-1 mm), so the law visits many regions."""
     from fmpy import read_model_description
 
-    reason = " ".join(filter(None, (arm_missing(), wine_missing())))
-    if reason:
-        pytest.skip(reason)
     native, _ = twins["back EMF"]
-    md = read_model_description(str(native))
-    vr = {v.name: v.valueReference for v in md.modelVariables}
-    steps = 800
-    programs = {"linux64": tmp_path / "fmu_host", "aarch64-linux": tmp_path / "fmu_host_arm",
-                "win64": tmp_path / "fmu_host.exe"}
-    for compiler, program, extra in (("gcc", programs["linux64"], ["-ldl"]), (AARCH64, programs["aarch64-linux"], ["-ldl"]),
-                                     (MINGW, programs["win64"], ["-static-libgcc"])):
-        subprocess.run([compiler, "-O2", "-std=c99", "-I", str(HEADERS), str(HOST), "-o", str(program), *extra], check=True)
-    outputs = {}
-    for platform in programs:
-        unzipped = tmp_path / platform
-        zipfile.ZipFile(native).extractall(unzipped)
-        library = str(unzipped / "binaries" / platform / f"STOSController{'.dll' if platform == 'win64' else '.so'}")
-        plan = tmp_path / f"plan_{platform}.txt"
-        windows = (lambda path: "Z:" + str(path).replace("/", "\\")) if platform == "win64" else str
-        # the host drives the position error with its own sequence (+-1 mm): the law visits every region
-        plan.write_text(f"fmu {windows(library)} {md.guid}\ninput {vr['x_r']} 1e-3\noutput {vr['u']}\nrun {steps} {TS!r}\n")
-        if platform == "win64":
-            completed = run_wine(programs[platform], windows(plan), tmp_path)
-        else:
-            command = [QEMU, "-L", ARM_ROOT] if platform == "aarch64-linux" else []
-            completed = subprocess.run([*command, str(programs[platform]), str(plan)], capture_output=True, text=True,
-                                       timeout=300)
-        assert completed.returncode == 0, (platform, completed.stderr[-2000:])
-        outputs[platform] = np.array(completed.stdout.split(), dtype=float)
+    vr = {v.name: v.valueReference for v in read_model_description(str(native)).modelVariables}
+    outputs = run_on_every_platform(native, f"input {vr['x_r']} 1e-3\noutput {vr['u']}\nrun 800 {TS!r}\n", tmp_path)
     reference = outputs["linux64"]
-    assert reference.size == steps and np.ptp(reference) > 0.5 * U and len(set(reference)) > 3
+    assert reference.size == 800 and np.ptp(reference) > 0.5 * U and len(set(reference)) > 3
     for platform in ("aarch64-linux", "win64"):
         np.testing.assert_allclose(outputs[platform], reference, rtol=0, atol=1e-12 * U, err_msg=platform)
 
 
-VALGRIND_DRIVER = r"""
-#include <stdio.h>
-#include <stdlib.h>
-#include <string.h>
-#include "fmi2Functions.h"
-#include "stos_model.h"
-
-static int errors_logged = 0;
-
-static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status, fmi2String category,
-                   fmi2String message, ...) {
-    (void)env; (void)name; (void)category; (void)message;
-    if (status == fmi2Error) errors_logged++;
-}
-
-static fmi2ValueReference vr_of(const char *name) {
-    for (size_t vr = 0; vr < stos_model.n_real + stos_model.n_integer + stos_model.n_boolean + stos_model.n_string; vr++)
-        if (strcmp(stos_model.variables[vr].name, name) == 0) return (fmi2ValueReference)vr;
-    fprintf(stderr, "no variable %s\n", name);
-    exit(1);
-}
-
-#define CHECK(call) do { if ((call) != fmi2OK) { fprintf(stderr, "failed: %s\n", #call); return 1; } } while (0)
-#define REFUSED(call) do { int before = errors_logged; \
-    if ((call) != fmi2Error || errors_logged != before + 1) { fprintf(stderr, "not refused: %s\n", #call); return 1; } \
-    } while (0)
-
+VALGRIND_DRIVER = twin_driver("stos_model.h", "stos_variables", r"""
 /* The closed loop around the rigid body x'' = b u, with steps of every kind. */
 static int run(fmi2Component c, double *t, double *x, double *v, int steps) {
     static const double sizes[] = {1e-5, 2.5e-6, 1e-16, 3e-5, 7.5e-6, 1e-5};
@@ -262,7 +206,7 @@ static int run(fmi2Component c, double *t, double *x, double *v, int steps) {
 int main(void) {
     const fmi2CallbackFunctions callbacks = {logger, calloc, free, NULL, NULL};
     double t = 0.0, x = 0.0, v = 0.0, value;
-    fmi2Component c = fmi2Instantiate("c", fmi2CoSimulation, stos_model.guid, "", &callbacks, fmi2False, fmi2True);
+    fmi2Component c = fmi2Instantiate("c", fmi2CoSimulation, stos_variables.guid, "", &callbacks, fmi2False, fmi2True);
     if (c == NULL) return 1;
     REFUSED(fmi2DoStep(c, 0.0, 1e-5, fmi2True));                     /* before initialisation */
     CHECK(fmi2Reset(c));
@@ -296,7 +240,7 @@ int main(void) {
     printf("ok %g\n", x);
     return 0;
 }
-"""
+""")
 
 
 @pytest.mark.skipif(shutil.which("valgrind") is None or shutil.which("gcc") is None, reason="needs valgrind and gcc")

@@ -56,7 +56,6 @@ import shutil
 import sys
 import time as wallclock
 import weakref
-from pathlib import Path
 
 import numpy as np
 

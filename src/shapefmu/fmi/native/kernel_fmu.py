@@ -49,6 +49,28 @@ def c_string(text: str) -> str:
     return f'"{text}"'
 
 
+def c_doubles(name: str, values) -> str:
+    """A static const double array ``name`` of ``values``, each exact (repr), four to a line."""
+    rows = ",\n    ".join(", ".join(repr(float(v)) for v in values[i:i + 4]) for i in range(0, len(values), 4))
+    return f"static const double {name}[] = {{\n    {rows or '0.0'}\n}};"
+
+
+def twin_variables_c(table: str, variables, values: dict, meaning_of, guid: str) -> str:
+    """C of the TwinVariables ``table`` (``c/twin_variables.h``): each of the numbered ``variables``
+    with its role, its meaning ``meaning_of(name)`` (an enumerator of the model part) and its start
+    value from ``values``."""
+    rows = []
+    for var in variables:
+        value = values[var.name]
+        start, string = ("0.0", c_string(value)) if var.type == "String" else (repr(float(value)), "NULL")
+        rows.append(f'    {{"{var.name}", {ROLES[(var.causality, var.variability)]}, {meaning_of(var.name)}, {start}, '
+                    f'{string}}},')
+    counts = ", ".join(str(sum(v.type == t for v in variables)) for t in TYPE_ORDER)
+    body = "\n".join(rows)
+    return (f"static const TwinVariable {table}_rows[] = {{\n{body}\n}};\n\n"
+            f'const TwinVariables {table} = {{"{guid}", {counts}, {table}_rows}};\n')
+
+
 def write_native_fmu(name: str, out_path, slave, variables, values: dict, dependencies: dict, c_sources,
                      c_headers, model_c, about: str, log_categories=CATEGORIES) -> Path:
     """Write the native FMU ``name`` to ``out_path`` and return the path.

@@ -15,7 +15,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from shapefmu.fmi.native.kernel_fmu import number_by_type, write_native_fmu
+from shapefmu.fmi.native.kernel_fmu import c_doubles, number_by_type, write_native_fmu
 from shapefmu.fmi.python.builder import designed_slave
 
 NAME = "ReferencePlayer"
@@ -26,11 +26,6 @@ MAX_TABLE_TEXT = 16_000_000  # bytes
 NATIVE_NOTE = ("This FMU is the native C twin of the pythonfmu ReferencePlayer: the same variables and numbers, no "
                "Python needed. Its table was parsed at build time, so the table parameter keeps its build value "
                "(rebuild for another table). sources/ holds its C code.")
-
-
-def _doubles(name: str, values) -> str:
-    rows = ",\n    ".join(", ".join(repr(float(v)) for v in values[i:i + 4]) for i in range(0, len(values), 4))
-    return f"static const double {name}[] = {{\n    {rows}\n}};"
 
 
 def _bytes(name: str, text: str) -> str:
@@ -46,10 +41,10 @@ def _model_c(table, text: str, guid: str) -> str:
 #include "table_model.h"
 
 {_bytes("table_text", text)}
-{_doubles("times", table.times)}
-{_doubles("left", table._left)}
-{_doubles("right", table._right)}
-{_doubles("integral", table._integral)}
+{c_doubles("times", table.times)}
+{c_doubles("left", table._left)}
+{c_doubles("right", table._right)}
+{c_doubles("integral", table._integral)}
 
 const TableModel table_model = {{
     "{guid}", table_text, {len(table.times)}, times, left, right, integral, {int(table.interpolation == "hold")},

@@ -52,9 +52,6 @@ typedef struct {
 
 static Tuner *tuner_of(const Fmi2Instance *inst) { return (Tuner *)inst->model; }
 
-static size_t n_variables(void) {
-    return ekf_tuner_model.n_real + ekf_tuner_model.n_integer + ekf_tuner_model.n_boolean + ekf_tuner_model.n_string;
-}
 
 static double real_of(const Fmi2Instance *inst, EkfMeaning meaning) { return inst->reals[tuner_of(inst)->vr[meaning]]; }
 
@@ -182,18 +179,12 @@ static void publish_estimates(Fmi2Instance *inst) {
 
 void model_describe(Fmi2ModelInfo *info) {
     memset(info, 0, sizeof *info);
-    info->guid = ekf_tuner_model.guid;
-    info->n_real = ekf_tuner_model.n_real;
-    info->n_integer = ekf_tuner_model.n_integer;
-    info->n_boolean = ekf_tuner_model.n_boolean;
-    info->n_string = ekf_tuner_model.n_string;
+    twin_describe(&ekf_tuner_model, info);
 }
 
 Fmi2Role model_variable(const Fmi2Instance *inst, Fmi2Type type, size_t vr, const char **name) {
     (void)inst, (void)type;
-    if (vr >= n_variables()) return FMI2_NO_VARIABLE;
-    *name = ekf_tuner_model.variables[vr].name;
-    return ekf_tuner_model.variables[vr].role;
+    return twin_variable(&ekf_tuner_model, vr, name);
 }
 
 static void release_run(Fmi2Instance *inst) {
@@ -208,14 +199,7 @@ static void release_run(Fmi2Instance *inst) {
 }
 
 void model_reset(Fmi2Instance *inst) {
-    const size_t n_real = ekf_tuner_model.n_real, n_integer = ekf_tuner_model.n_integer;
-    for (size_t vr = 0; vr < n_variables(); vr++) {
-        const EkfVariable *v = &ekf_tuner_model.variables[vr];
-        if (vr < n_real) inst->reals[vr] = v->start;
-        else if (vr < n_real + n_integer) inst->integers[vr - n_real] = (int)v->start;
-        else if (vr < n_real + n_integer + ekf_tuner_model.n_boolean) inst->booleans[vr - n_real - n_integer] = v->start != 0.0;
-        else snprintf(fmi2_string(inst, vr), fmi2_string_capacity(inst) + 1, "%s", v->string_start);
-    }
+    twin_reset(&ekf_tuner_model, inst);
     release_run(inst);
     tuner_of(inst)->failure = NULL;
 }
@@ -226,7 +210,7 @@ int model_instantiate(Fmi2Instance *inst) {
     memset(t, 0, sizeof *t);
     inst->model = t;
     t->inst = inst;
-    for (size_t vr = 0; vr < n_variables(); vr++) t->vr[ekf_tuner_model.variables[vr].meaning] = vr;
+    twin_index(&ekf_tuner_model, t->vr, EKF_MEANINGS);
     model_reset(inst);
     return 0;
 }
@@ -295,7 +279,7 @@ static fmi2Status range(Fmi2Instance *inst, const char *name, double value, int 
 }
 
 fmi2Status model_check_real(Fmi2Instance *inst, size_t vr, double value, const char *function) {
-    const EkfVariable *v = &ekf_tuner_model.variables[vr];
+    const TwinVariable *v = &ekf_tuner_model.variables[vr];
     switch (v->meaning) {
     case EKF_PERIOD: case EKF_OMEGA0: case EKF_AMPLITUDE: case EKF_RETUNE:
         return range(inst, v->name, value, value > 0.0, "> 0", function);
@@ -304,14 +288,14 @@ fmi2Status model_check_real(Fmi2Instance *inst, size_t vr, double value, const c
 }
 
 fmi2Status model_check_integer(Fmi2Instance *inst, size_t vr, int value, const char *function) {
-    const EkfVariable *v = &ekf_tuner_model.variables[vr];
+    const TwinVariable *v = &ekf_tuner_model.variables[vr];
     if (v->meaning == EKF_ORDER && (value < 0 || value > MAX_ORDER))
         return fmi2_fail(inst, "%s: %s must be an integer in [0, %d], got %d", function, v->name, MAX_ORDER, value);
     return fmi2OK;
 }
 
 fmi2Status model_check_string(Fmi2Instance *inst, size_t vr, const char *value, const char *function) {
-    const EkfVariable *v = &ekf_tuner_model.variables[vr];
+    const TwinVariable *v = &ekf_tuner_model.variables[vr];
     if (v->meaning == EKF_KIND && closed_form_kind(value) == KIND_NOT_CLOSED_FORM)
         return fmi2_fail(inst, "%s: %s must be one of zv, zvd, zvdd, zv_dn, mzv, got %s", function, v->name, value);
     return fmi2OK;

@@ -5,7 +5,7 @@
 #ifndef EKF_TUNER_MODEL_H
 #define EKF_TUNER_MODEL_H
 
-#include "fmi2_model.h"
+#include "twin_variables.h"
 
 typedef enum {
     EKF_KIND,          /* kind: the closed-form shaper designed for the estimate */
@@ -23,20 +23,7 @@ typedef enum {
     EKF_MEANINGS
 } EkfMeaning;
 
-typedef struct {
-    const char *name;
-    Fmi2Role role;
-    EkfMeaning meaning;
-    double start;              /* Real and Integer start values */
-    const char *string_start;  /* String start value, else NULL */
-} EkfVariable;
 
-typedef struct {
-    const char *guid;
-    size_t n_real, n_integer, n_boolean, n_string;
-    const EkfVariable *variables;  /* by value reference */
-} EkfTunerModel;
-
-extern const EkfTunerModel ekf_tuner_model;
+extern const TwinVariables ekf_tuner_model;
 
 #endif

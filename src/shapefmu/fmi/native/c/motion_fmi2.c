@@ -23,16 +23,13 @@ typedef struct {
 
 static Generator *generator_of(const Fmi2Instance *inst) { return (Generator *)inst->model; }
 
-static size_t n_variables(void) {
-    return motion_model.n_real + motion_model.n_integer + motion_model.n_boolean + motion_model.n_string;
-}
 
 /* (position, velocity, acceleration) at t; the acceleration is right-continuous. */
 static void state_at(double t, double *out) {
-    const double *breaks = motion_model.breaks;
-    const size_t n = motion_model.n_levels;
+    const double *breaks = motion_path.breaks;
+    const size_t n = motion_path.n_levels;
     /* k = bisect_right(breaks, t + tolerance) - 1 */
-    const double key = t + motion_model.tolerance;
+    const double key = t + motion_path.tolerance;
     size_t low = 0, high = n + 1;
     while (low < high) {
         const size_t mid = low + (high - low) / 2;
@@ -46,11 +43,11 @@ static void state_at(double t, double *out) {
     const size_t k = low - 1;
     if (k >= n) {
         const double s = t - breaks[n];
-        out[0] = motion_model.position[n] + motion_model.velocity[n] * s, out[1] = motion_model.velocity[n], out[2] = 0.0;
+        out[0] = motion_path.position[n] + motion_path.velocity[n] * s, out[1] = motion_path.velocity[n], out[2] = 0.0;
         return;
     }
-    const double s = t - breaks[k], a = motion_model.levels[k], v = motion_model.velocity[k];
-    out[0] = motion_model.position[k] + v * s + 0.5 * a * s * s, out[1] = v + a * s, out[2] = a;
+    const double s = t - breaks[k], a = motion_path.levels[k], v = motion_path.velocity[k];
+    out[0] = motion_path.position[k] + v * s + 0.5 * a * s * s, out[1] = v + a * s, out[2] = a;
 }
 
 static void update(Fmi2Instance *inst, double t) {
@@ -74,29 +71,16 @@ static void maybe_start(Fmi2Instance *inst, double t) {
 
 void model_describe(Fmi2ModelInfo *info) {
     memset(info, 0, sizeof *info);
-    info->guid = motion_model.guid;
-    info->n_real = motion_model.n_real;
-    info->n_integer = motion_model.n_integer;
-    info->n_boolean = motion_model.n_boolean;
-    info->n_string = motion_model.n_string;
+    twin_describe(&motion_variables, info);
 }
 
 Fmi2Role model_variable(const Fmi2Instance *inst, Fmi2Type type, size_t vr, const char **name) {
     (void)inst, (void)type;
-    if (vr >= n_variables()) return FMI2_NO_VARIABLE;
-    *name = motion_model.variables[vr].name;
-    return motion_model.variables[vr].role;
+    return twin_variable(&motion_variables, vr, name);
 }
 
 void model_reset(Fmi2Instance *inst) {
-    const size_t n_real = motion_model.n_real, n_integer = motion_model.n_integer;
-    for (size_t vr = 0; vr < n_variables(); vr++) {
-        const MotionVariable *v = &motion_model.variables[vr];
-        if (vr < n_real) inst->reals[vr] = v->start;
-        else if (vr < n_real + n_integer) inst->integers[vr - n_real] = (int)v->start;
-        else if (vr < n_real + n_integer + motion_model.n_boolean) inst->booleans[vr - n_real - n_integer] = v->start != 0.0;
-        else snprintf(fmi2_string(inst, vr), fmi2_string_capacity(inst) + 1, "%s", v->string_start);
-    }
+    twin_reset(&motion_variables, inst);
     Generator *g = generator_of(inst);
     g->started = g->has_start = 0;
     g->started_at = 0.0;
@@ -107,7 +91,7 @@ int model_instantiate(Fmi2Instance *inst) {
     if (g == NULL) return -1;
     memset(g, 0, sizeof *g);
     inst->model = g;
-    for (size_t vr = 0; vr < n_variables(); vr++) g->vr[motion_model.variables[vr].meaning] = vr;
+    twin_index(&motion_variables, g->vr, MOTION_MEANINGS);
     model_reset(inst);
     return 0;
 }
@@ -144,17 +128,13 @@ fmi2Status model_do_step(Fmi2Instance *inst, double t, double h) {
 
 /* ---------------------------------------------------------------- values */
 
-static fmi2Status keeps(Fmi2Instance *inst, const MotionVariable *v, const char *given, int same, const char *function) {
+static fmi2Status keeps(Fmi2Instance *inst, const TwinVariable *v, const char *given, int same, const char *function) {
     if (same) return fmi2OK;
-    char start[64];
-    if (v->string_start != NULL) snprintf(start, sizeof start, "%s", v->string_start);
-    else snprintf(start, sizeof start, "%.17g", v->start);
-    return fmi2_fail(inst, "%s: %s is %s in this native FMU, whose move is designed at build time; got %s (rebuild it "
-                     "with shapefmu build profile --native for another value)", function, v->name, start, given);
+    return twin_refuse(inst, v, given, "move is", "shapefmu build profile --native", function);
 }
 
 fmi2Status model_check_real(Fmi2Instance *inst, size_t vr, double value, const char *function) {
-    const MotionVariable *v = &motion_model.variables[vr];
+    const TwinVariable *v = &motion_variables.variables[vr];
     if (!isfinite(value)) return fmi2_fail(inst, "%s: %s must be finite, got %g", function, v->name, value);
     if (v->meaning != MOTION_DESIGN) return fmi2OK;
     char given[32];
@@ -163,20 +143,20 @@ fmi2Status model_check_real(Fmi2Instance *inst, size_t vr, double value, const c
 }
 
 fmi2Status model_check_integer(Fmi2Instance *inst, size_t vr, int value, const char *function) {
-    const MotionVariable *v = &motion_model.variables[vr];
+    const TwinVariable *v = &motion_variables.variables[vr];
     char given[32];
     snprintf(given, sizeof given, "%d", value);
     return keeps(inst, v, given, value == (int)v->start, function);
 }
 
 fmi2Status model_check_string(Fmi2Instance *inst, size_t vr, const char *value, const char *function) {
-    const MotionVariable *v = &motion_model.variables[vr];
+    const TwinVariable *v = &motion_variables.variables[vr];
     return keeps(inst, v, value, strcmp(value, v->string_start) == 0, function);
 }
 
 void model_changed(Fmi2Instance *inst, size_t vr) {
     Generator *g = generator_of(inst);
-    if (motion_model.variables[vr].meaning != MOTION_START || !g->started || g->has_start) return;
+    if (motion_variables.variables[vr].meaning != MOTION_START || !g->started || g->has_start) return;
     if (inst->reals[vr] >= 0.5) {
         g->has_start = 1, g->started_at = inst->time;
         update(inst, inst->time);

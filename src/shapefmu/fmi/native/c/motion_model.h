@@ -6,7 +6,7 @@
 #ifndef MOTION_MODEL_H
 #define MOTION_MODEL_H
 
-#include "fmi2_model.h"
+#include "twin_variables.h"
 
 typedef enum {
     MOTION_DESIGN,        /* every parameter the move is designed from: keeps its build value */
@@ -16,24 +16,16 @@ typedef enum {
     MOTION_MEANINGS
 } MotionMeaning;
 
+/* The move: acceleration levels[k] on [breaks[k], breaks[k + 1]), the velocity and position
+ * accumulated at every break, times within tolerance of a break at it. */
 typedef struct {
-    const char *name;
-    Fmi2Role role;
-    MotionMeaning meaning;
-    double start;              /* Real, Integer and Boolean start values */
-    const char *string_start;  /* String start value, else NULL */
-} MotionVariable;
-
-typedef struct {
-    const char *guid;
-    size_t n_real, n_integer, n_boolean, n_string;
-    const MotionVariable *variables;  /* by value reference */
     size_t n_levels;
     const double *breaks, *velocity, *position;  /* n_levels + 1 each */
     const double *levels;                        /* n_levels */
     double tolerance;
-} MotionModel;
+} MotionPath;
 
-extern const MotionModel motion_model;
+extern const TwinVariables motion_variables;
+extern const MotionPath motion_path;
 
 #endif

@@ -28,9 +28,6 @@ typedef struct {
 
 static Controller *controller_of(const Fmi2Instance *inst) { return (Controller *)inst->model; }
 
-static size_t n_variables(void) {
-    return stos_model.n_real + stos_model.n_integer + stos_model.n_boolean + stos_model.n_string;
-}
 
 static double real_of(const Fmi2Instance *inst, StosMeaning meaning) {
     return inst->reals[controller_of(inst)->vr[meaning]];
@@ -53,43 +50,30 @@ static void preview(Fmi2Instance *inst) {
     double inputs[3];
     current_inputs(inst, inputs);
     StosState scratch = c->state;
-    inst->reals[c->vr[STOS_OUTPUT]] = stos_control(&stos_model.curves, c->settle_on ? &c->settle : NULL, &scratch,
+    inst->reals[c->vr[STOS_OUTPUT]] = stos_control(&stos_curves, c->settle_on ? &c->settle : NULL, &scratch,
                                                    inputs[0], inputs[1], inputs[2]);
     c->dirty = 0;
 }
 
 static void commit(void *context, const double *inputs) {
     Controller *c = context;
-    stos_control(&stos_model.curves, c->settle_on ? &c->settle : NULL, &c->state, inputs[0], inputs[1], inputs[2]);
+    stos_control(&stos_curves, c->settle_on ? &c->settle : NULL, &c->state, inputs[0], inputs[1], inputs[2]);
 }
 
 /* ---------------------------------------------------------------- life cycle */
 
 void model_describe(Fmi2ModelInfo *info) {
     memset(info, 0, sizeof *info);
-    info->guid = stos_model.guid;
-    info->n_real = stos_model.n_real;
-    info->n_integer = stos_model.n_integer;
-    info->n_boolean = stos_model.n_boolean;
-    info->n_string = stos_model.n_string;
+    twin_describe(&stos_variables, info);
 }
 
 Fmi2Role model_variable(const Fmi2Instance *inst, Fmi2Type type, size_t vr, const char **name) {
     (void)inst, (void)type;
-    if (vr >= n_variables()) return FMI2_NO_VARIABLE;
-    *name = stos_model.variables[vr].name;
-    return stos_model.variables[vr].role;
+    return twin_variable(&stos_variables, vr, name);
 }
 
 void model_reset(Fmi2Instance *inst) {
-    const size_t n_real = stos_model.n_real, n_integer = stos_model.n_integer;
-    for (size_t vr = 0; vr < n_variables(); vr++) {
-        const StosVariable *v = &stos_model.variables[vr];
-        if (vr < n_real) inst->reals[vr] = v->start;
-        else if (vr < n_real + n_integer) inst->integers[vr - n_real] = (int)v->start;
-        else if (vr < n_real + n_integer + stos_model.n_boolean) inst->booleans[vr - n_real - n_integer] = v->start != 0.0;
-        else snprintf(fmi2_string(inst, vr), fmi2_string_capacity(inst) + 1, "%s", v->string_start);
-    }
+    twin_reset(&stos_variables, inst);
     Controller *c = controller_of(inst);
     c->started = c->dirty = 0;
 }
@@ -99,7 +83,7 @@ int model_instantiate(Fmi2Instance *inst) {
     if (c == NULL) return -1;
     memset(c, 0, sizeof *c);
     inst->model = c;
-    for (size_t vr = 0; vr < n_variables(); vr++) c->vr[stos_model.variables[vr].meaning] = vr;
+    twin_index(&stos_variables, c->vr, STOS_MEANINGS);
     model_reset(inst);
     return 0;
 }
@@ -113,7 +97,7 @@ fmi2Status model_exit_initialization(Fmi2Instance *inst) {
     static const char *const function = "fmi2ExitInitializationMode";
     Controller *c = controller_of(inst);
     const double ts = real_of(inst, STOS_PERIOD);
-    c->settle_on = inst->booleans[c->vr[STOS_SETTLE] - stos_model.n_real - stos_model.n_integer];
+    c->settle_on = inst->booleans[c->vr[STOS_SETTLE] - stos_variables.n_real - stos_variables.n_integer];
     if (c->settle_on) {
         const StosSettle s = {real_of(inst, STOS_KP), real_of(inst, STOS_KD), real_of(inst, STOS_KI), ts,
                               real_of(inst, STOS_X_ENTER), real_of(inst, STOS_V_ENTER), real_of(inst, STOS_X_EXIT),
@@ -156,18 +140,13 @@ fmi2Status model_do_step(Fmi2Instance *inst, double t, double h) {
 
 /* ---------------------------------------------------------------- values */
 
-static fmi2Status keeps(Fmi2Instance *inst, const StosVariable *v, const char *given, int same, const char *function) {
+static fmi2Status keeps(Fmi2Instance *inst, const TwinVariable *v, const char *given, int same, const char *function) {
     if (same) return fmi2OK;
-    char start[64];
-    if (v->string_start != NULL) snprintf(start, sizeof start, "%s", v->string_start);
-    else snprintf(start, sizeof start, "%.17g", v->start);
-    return fmi2_fail(inst, "%s: %s is %s in this native FMU, whose switching curves are designed at build time; got %s "
-                     "(rebuild it with shapefmu build stos-controller --native for another value)", function, v->name,
-                     start, given);
+    return twin_refuse(inst, v, given, "switching curves are", "shapefmu build stos-controller --native", function);
 }
 
 fmi2Status model_check_real(Fmi2Instance *inst, size_t vr, double value, const char *function) {
-    const StosVariable *v = &stos_model.variables[vr];
+    const TwinVariable *v = &stos_variables.variables[vr];
     if (!isfinite(value) || (v->meaning == STOS_PERIOD && !(value > 0.0)))
         return fmi2_fail(inst, "%s: %s must be %s, got %g", function, v->name,
                          v->meaning == STOS_PERIOD ? "> 0" : "finite", value);
@@ -180,7 +159,7 @@ fmi2Status model_check_real(Fmi2Instance *inst, size_t vr, double value, const c
 }
 
 fmi2Status model_check_integer(Fmi2Instance *inst, size_t vr, int value, const char *function) {
-    const StosVariable *v = &stos_model.variables[vr];
+    const TwinVariable *v = &stos_variables.variables[vr];
     if (v->meaning != STOS_DESIGN) return fmi2OK; /* settle, a Boolean, reaches here too */
     char given[32];
     snprintf(given, sizeof given, "%d", value);
@@ -188,13 +167,13 @@ fmi2Status model_check_integer(Fmi2Instance *inst, size_t vr, int value, const c
 }
 
 fmi2Status model_check_string(Fmi2Instance *inst, size_t vr, const char *value, const char *function) {
-    const StosVariable *v = &stos_model.variables[vr];
+    const TwinVariable *v = &stos_variables.variables[vr];
     return keeps(inst, v, value, strcmp(value, v->string_start) == 0, function);
 }
 
 void model_changed(Fmi2Instance *inst, size_t vr) {
     Controller *c = controller_of(inst);
-    const StosMeaning meaning = stos_model.variables[vr].meaning;
+    const StosMeaning meaning = stos_variables.variables[vr].meaning;
     if (meaning == STOS_TARGET || meaning == STOS_POSITION || meaning == STOS_VELOCITY) c->dirty = 1;
 }
 

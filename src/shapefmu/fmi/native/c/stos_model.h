@@ -1,12 +1,12 @@
 /* The contract between the native STOS controller's model part (stos_fmi2.c, written once) and the
  * model.c that shapefmu.fmi.native.stos generates for one build: the variables of the pythonfmu
- * STOSController with their start values and meanings, and the switching curves designed at build
- * time (runtime/stos.py stos_curves over the build's shaper). */
+ * STOSController with their start values and meanings (StosMeaning), and the switching curves
+ * designed at build time (runtime/stos.py stos_curves over the build's shaper). */
 #ifndef STOS_MODEL_H
 #define STOS_MODEL_H
 
-#include "fmi2_model.h"
 #include "stos_law.h"
+#include "twin_variables.h"
 
 typedef enum {
     STOS_DESIGN,      /* b, U, damping, kind, n, n_modes, f[i], zeta[i]: the curves' build values */
@@ -18,21 +18,7 @@ typedef enum {
     STOS_MEANINGS
 } StosMeaning;
 
-typedef struct {
-    const char *name;
-    Fmi2Role role;
-    StosMeaning meaning;
-    double start;              /* Real, Integer and Boolean start values */
-    const char *string_start;  /* String start value, else NULL */
-} StosVariable;
-
-typedef struct {
-    const char *guid;
-    size_t n_real, n_integer, n_boolean, n_string;
-    const StosVariable *variables;  /* by value reference */
-    StosCurves curves;
-} StosModel;
-
-extern const StosModel stos_model;
+extern const TwinVariables stos_variables;
+extern const StosCurves stos_curves;
 
 #endif
