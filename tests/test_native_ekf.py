@@ -20,7 +20,7 @@ from fmpy.validation import validate_fmu
 from fmu_drivers import configured, fmpy_slave, initialised, set_start_values, variable_references
 from fmu_signal_drivers import run_ecos, run_fmpy, run_libcosim
 from native_drivers import twin_driver
-from test_fmu_ekf import OMEGA, OUTPUTS, _signals
+from test_fmu_ekf import OMEGA, OUTPUTS, _drive, _signals
 
 from shapefmu.fmi.native.ekf_tuner import build_native_ekf_tuner
 
@@ -112,15 +112,6 @@ def test_equals_the_twin_in_the_c_host_with_drifting_time_random_steps_and_exit_
     assert np.array_equal(twin[:, :3], native[:, :3])  # the same times and inputs
     assert twin[-1, -1] == 1.0 and twin[-1, 4] == pytest.approx(2 * math.pi * 20.0, rel=1e-3)  # it tuned
     assert_same(native[:, 3:], twin[:, 3:])
-
-
-def _drive(slave, vr, inputs, start):
-    rows = []
-    for k, values in enumerate(inputs, start=start):
-        slave.setReal([vr["u"], vr["vibration"]], [values["u"], values["vibration"]])
-        slave.doStep(k * H, H)
-        rows.append(slave.getReal([vr[name] for name in OUTPUTS]))
-    return rows
 
 
 def test_state_restores_the_ekf_and_the_shaper_exactly(native_ekf):
