@@ -140,7 +140,9 @@ def test_equals_the_twin_in_the_c_host_with_drifting_time_random_steps_and_exit_
 
 
 @pytest.mark.parametrize(("starts", "words"), [
-    ({"f[1]": 2100.0}, "f[1] is 2000 in this native FMU, whose switching curves are designed at build time; got 2100"),
+    ({"f[1]": 2100.0}, "f[1] is 2000 in this native FMU, whose shaper is designed at build time; got 2100"),
+    ({"b": -1.0}, "b must be > 0, got -1"),
+    ({"zeta[2]": 1.0}, "zeta[2] must be in [0, 1), got 1"),
     ({"kind": "zvd"}, "kind is simultaneous in this native FMU"),
     ({"n_modes": 1}, "n_modes is 2 in this native FMU"),
     ({"Ts": 0.0}, "Ts must be > 0, got 0"),
@@ -160,15 +162,20 @@ def test_bad_parameters_are_refused_with_a_logged_message(twins, capfd, starts, 
     assert refused.value.status == 3 and words in capfd.readouterr().out
 
 
-def test_ts_and_the_settle_law_may_change_before_initialisation_as_on_the_twin(twins):
-    native, twin = twins["simultaneous"]
-    changed = {"Ts": 2e-5, "settle": True, **SETTLE}
+@pytest.mark.parametrize(("case", "changed"), [
+    ("simultaneous", {"Ts": 2e-5, "settle": True, **SETTLE}),
+    ("simultaneous", {"b": 3.1e3, "U": 9.0, "damping": 300.0}),  # the curves redesigned in C for this body
+    ("zv convolved", {"kind": "mzv", "n_modes": 1, "f[1]": 1500.0, "zeta[1]": 0.05, "U": 12.0}),  # and this shaper
+    ("zv convolved", {"kind": "zv_dn", "n": 2, "f[2]": 3500.0}),
+])
+def test_parameters_set_before_initialisation_act_as_on_the_twin(twins, case, changed):
+    native, twin = twins[case]
     runs = []
     for fmu in (native, twin):
         slave, vr = initialised(fmu, changed)
-        runs.append(_fmu_loop(slave, vr, 300)[0])
+        runs.append(_fmu_loop(slave, vr, 400)[0])
         slave.freeInstance()
-    assert runs[0] == runs[1]
+    assert runs[0] == runs[1] and len(set(runs[1])) > 3
 
 
 def test_the_c_host_on_linux64_win64_and_aarch64_gives_the_same_numbers(twins, tmp_path):

@@ -1,10 +1,13 @@
 /* The native STOS controller (paper 002) behind the generic FMI 2.0 layer: the C twin of the
  * pythonfmu STOSController, with the same variables and sampled semantics.
  *
- * The switching curves are designed at build time (stos_model.h) for the build's rigid body and
- * shaper, so b, U, damping, kind, n, n_modes, f[i] and zeta[i] keep their build values (another
- * value is refused with a message saying to rebuild). Ts and the settle law's switch and gains are
- * used as they are at the exit of initialisation and may change before it.
+ * At the exit of initialisation the switching curves are designed in C (stos_law.c, runtime/stos.py's
+ * stos_curves) for the rigid body b, U, damping and the shaper: re-designed by shaper_designs.c
+ * from kind, n, n_modes, f[i], zeta[i] when the build's kind is closed-form (zv, zvd, zvdd, zv_dn,
+ * mzv), else the build's impulses (stos_model.h), whose design parameters then keep their build
+ * values (another value is refused with a message saying to rebuild). Every other parameter (b, U,
+ * damping, Ts, the settle law's switch and gains) may change before initialisation, as in the
+ * pythonfmu FMU.
  *
  * The law runs once per sample of the absolute grid t0 + k Ts (sample_clock.c) with the inputs in
  * effect at that instant. The output u feeds through: at a communication point it is the law
@@ -16,13 +19,20 @@
 #include <string.h>
 
 #include "sample_clock.h"
+#include "shaper_designs.h"
 #include "stos_model.h"
+
+#define PI 3.14159265358979323846
+/* Impulses of a shaper re-designed in C (the product over the modes of each mode's). */
+#define MAX_IMPULSES 4096
 
 typedef struct {
     long long started, dirty, settle_on;
     StosSettle settle;
     StosState state;
     SampleClock clock;
+    StosCurves curves;  /* its arrays in storage, designed at the exit of initialisation */
+    double *storage;
     size_t vr[STOS_MEANINGS];
 } Controller;
 
@@ -50,14 +60,14 @@ static void preview(Fmi2Instance *inst) {
     double inputs[3];
     current_inputs(inst, inputs);
     StosState scratch = c->state;
-    inst->reals[c->vr[STOS_OUTPUT]] = stos_control(&stos_curves, c->settle_on ? &c->settle : NULL, &scratch,
+    inst->reals[c->vr[STOS_OUTPUT]] = stos_control(&c->curves, c->settle_on ? &c->settle : NULL, &scratch,
                                                    inputs[0], inputs[1], inputs[2]);
     c->dirty = 0;
 }
 
 static void commit(void *context, const double *inputs) {
     Controller *c = context;
-    stos_control(&stos_curves, c->settle_on ? &c->settle : NULL, &c->state, inputs[0], inputs[1], inputs[2]);
+    stos_control(&c->curves, c->settle_on ? &c->settle : NULL, &c->state, inputs[0], inputs[1], inputs[2]);
 }
 
 /* ---------------------------------------------------------------- life cycle */
@@ -72,8 +82,15 @@ Fmi2Role model_variable(const Fmi2Instance *inst, Fmi2Type type, size_t vr, cons
     return twin_variable(&stos_variables, vr, name);
 }
 
+static void release_curves(Fmi2Instance *inst) {
+    Controller *c = controller_of(inst);
+    fmi2_release(inst, c->storage);
+    c->storage = NULL;
+}
+
 void model_reset(Fmi2Instance *inst) {
     twin_reset(&stos_variables, inst);
+    release_curves(inst);
     Controller *c = controller_of(inst);
     c->started = c->dirty = 0;
 }
@@ -89,8 +106,47 @@ int model_instantiate(Fmi2Instance *inst) {
 }
 
 void model_free(Fmi2Instance *inst) {
+    if (inst->model == NULL) return;
+    release_curves(inst);
     fmi2_release(inst, inst->model);
     inst->model = NULL;
+}
+
+/* The shaper's impulses (re-designed, or the build's) and the curves for the rigid body now. */
+static fmi2Status design(Fmi2Instance *inst, const char *function) {
+    Controller *c = controller_of(inst);
+    double omega[STOS_MAX_MODES], zeta[STOS_MAX_MODES];
+    int count = stos_shaper.count;
+    const double *t = stos_shaper.times, *a = stos_shaper.amplitudes;
+    double *work = NULL; /* times, amplitudes and the design's scratch of a re-design */
+    if (stos_shaper.closed_form) {
+        work = fmi2_allocate(inst, 4 * MAX_IMPULSES, sizeof(double));
+        if (work == NULL) return fmi2_fail(inst, "%s: out of memory for the shaper's design", function);
+        double *times = work, *amplitudes = work + MAX_IMPULSES, *scratch = work + 2 * MAX_IMPULSES;
+        const char *kind = fmi2_string(inst, c->vr[STOS_KIND]);
+        const int n = inst->integers[c->vr[STOS_ORDER] - stos_variables.n_real];
+        const int n_modes = inst->integers[c->vr[STOS_MODES] - stos_variables.n_real];
+        for (int j = 0; j < n_modes; j++) {
+            omega[j] = 2.0 * PI * inst->reals[c->vr[STOS_F1 + j]];
+            zeta[j] = inst->reals[c->vr[STOS_ZETA1 + j]];
+        }
+        count = design_closed_form(closed_form_kind(kind), n, n_modes, omega, zeta, times, amplitudes, MAX_IMPULSES,
+                                   scratch);
+        if (count < 0) {
+            fmi2_release(inst, work);
+            return fmi2_fail(inst, "%s: kind %s with n = %d for n_modes = %d has more than %d impulses", function, kind,
+                             n, n_modes, MAX_IMPULSES);
+        }
+        t = times, a = amplitudes;
+    }
+    release_curves(inst);
+    c->storage = fmi2_allocate(inst, STOS_CURVE_DOUBLES(count), sizeof(double));
+    const char *unsuited = c->storage == NULL ? "out of memory for the switching curves"
+                           : stos_design_curves(&c->curves, c->storage, inst->reals[c->vr[STOS_B]],
+                                                inst->reals[c->vr[STOS_U]], inst->reals[c->vr[STOS_DAMPING]], t, a, count);
+    fmi2_release(inst, work);
+    if (unsuited != NULL) return fmi2_fail(inst, "%s: %s", function, unsuited);
+    return fmi2OK;
 }
 
 fmi2Status model_exit_initialization(Fmi2Instance *inst) {
@@ -112,6 +168,7 @@ fmi2Status model_exit_initialization(Fmi2Instance *inst) {
                                  checks[i].valid, checks[i].value);
         c->settle = s;
     }
+    if (design(inst, function) != fmi2OK) return fmi2Error;
     c->state.settling = 0.0, c->state.integral = 0.0;
     clock_start(&c->clock, inst->start_time, ts);
     c->started = 1;
@@ -142,15 +199,20 @@ fmi2Status model_do_step(Fmi2Instance *inst, double t, double h) {
 
 static fmi2Status keeps(Fmi2Instance *inst, const TwinVariable *v, const char *given, int same, const char *function) {
     if (same) return fmi2OK;
-    return twin_refuse(inst, v, given, "switching curves are", "shapefmu build stos-controller --native", function);
+    return twin_refuse(inst, v, given, "shaper is", "shapefmu build stos-controller --native", function);
 }
+
+static int shaper_parameter(int meaning) { return meaning >= STOS_KIND && meaning <= STOS_ZETA4; }
 
 fmi2Status model_check_real(Fmi2Instance *inst, size_t vr, double value, const char *function) {
     const TwinVariable *v = &stos_variables.variables[vr];
-    if (!isfinite(value) || (v->meaning == STOS_PERIOD && !(value > 0.0)))
-        return fmi2_fail(inst, "%s: %s must be %s, got %g", function, v->name,
-                         v->meaning == STOS_PERIOD ? "> 0" : "finite", value);
-    if (v->meaning == STOS_DESIGN) {
+    const int m = v->meaning;
+    const char *valid = !isfinite(value) ? "finite"
+                        : (m == STOS_PERIOD || m == STOS_B || m == STOS_U || (m >= STOS_F1 && m <= STOS_F4)) && !(value > 0.0) ? "> 0"
+                        : m == STOS_DAMPING && !(value >= 0.0) ? ">= 0"
+                        : m >= STOS_ZETA1 && m <= STOS_ZETA4 && !(value >= 0.0 && value < 1.0) ? "in [0, 1)" : NULL;
+    if (valid != NULL) return fmi2_fail(inst, "%s: %s must be %s, got %g", function, v->name, valid, value);
+    if (shaper_parameter(m) && !stos_shaper.closed_form) {
         char given[32];
         snprintf(given, sizeof given, "%.17g", value);
         return keeps(inst, v, given, value == v->start, function);
@@ -160,7 +222,11 @@ fmi2Status model_check_real(Fmi2Instance *inst, size_t vr, double value, const c
 
 fmi2Status model_check_integer(Fmi2Instance *inst, size_t vr, int value, const char *function) {
     const TwinVariable *v = &stos_variables.variables[vr];
-    if (v->meaning != STOS_DESIGN) return fmi2OK; /* settle, a Boolean, reaches here too */
+    if (v->meaning == STOS_ORDER && (value < 0 || value > 62))
+        return fmi2_fail(inst, "%s: n must be an integer in [0, 62], got %d", function, value);
+    if (v->meaning == STOS_MODES && (value < 1 || value > STOS_MAX_MODES))
+        return fmi2_fail(inst, "%s: n_modes must be in [1, %d], got %d", function, STOS_MAX_MODES, value);
+    if (!shaper_parameter(v->meaning) || stos_shaper.closed_form) return fmi2OK; /* settle, a Boolean, too */
     char given[32];
     snprintf(given, sizeof given, "%d", value);
     return keeps(inst, v, given, value == (int)v->start, function);
@@ -168,6 +234,11 @@ fmi2Status model_check_integer(Fmi2Instance *inst, size_t vr, int value, const c
 
 fmi2Status model_check_string(Fmi2Instance *inst, size_t vr, const char *value, const char *function) {
     const TwinVariable *v = &stos_variables.variables[vr];
+    if (stos_shaper.closed_form && closed_form_kind(value) != KIND_NOT_CLOSED_FORM) return fmi2OK;
+    if (stos_shaper.closed_form)
+        return fmi2_fail(inst, "%s: kind must be a kind this FMU designs in C (zv, zvd, zvdd, zv_dn, mzv), got %s; "
+                         "other kinds are designed at build time: shapefmu build stos-controller --native --param "
+                         "kind=%s", function, value, value);
     return keeps(inst, v, value, strcmp(value, v->string_start) == 0, function);
 }
 
@@ -222,5 +293,7 @@ int model_restore_state(Fmi2Instance *inst, const unsigned char *bytes, size_t s
         return -1;
     c->started = saved.started, c->dirty = saved.dirty, c->settle_on = saved.settle_on;
     c->settle = saved.settle, c->state = saved.state, c->clock = saved.clock;
+    /* the curves follow from the parameters the layer has just restored */
+    if (saved.started && design(inst, "fmi2SetFMUstate") != fmi2OK) return -1;
     return 0;
 }

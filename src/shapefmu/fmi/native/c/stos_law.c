@@ -165,3 +165,101 @@ double stos_control(const StosCurves *curves, const StosSettle *settle, StosStat
     }
     return curves->U * locate(curves, x_e, v, 0.0).level;
 }
+
+/* ---------------------------------------------------------------- the curves (runtime/stos.py stos_curves) */
+
+/* Python's math.fsum of x[0..n): Shewchuk's exact partials, rounded once, as CPython does. */
+static double exact_sum(const double *x, int n) {
+    double partials[128];
+    int used = 0;
+    for (int k = 0; k < n; k++) {
+        double value = x[k];
+        int i = 0;
+        for (int j = 0; j < used; j++) {
+            double y = partials[j];
+            if (fabs(value) < fabs(y)) {
+                const double swap = value;
+                value = y, y = swap;
+            }
+            const double hi = value + y, lo = y - (hi - value);
+            if (lo != 0.0) partials[i++] = lo;
+            value = hi;
+        }
+        used = i;
+        partials[used++] = value;
+    }
+    double hi = 0.0;
+    if (used > 0) {
+        double lo = 0.0;
+        hi = partials[--used];
+        while (used > 0) {
+            const double value = hi, y = partials[--used];
+            hi = value + y;
+            lo = y - (hi - value);
+            if (lo != 0.0) break;
+        }
+        if (used > 0 && ((lo < 0.0 && partials[used - 1] < 0.0) || (lo > 0.0 && partials[used - 1] > 0.0))) {
+            const double y = lo * 2.0, value = hi + y;
+            if (y == value - hi) hi = value;
+        }
+    }
+    return hi;
+}
+
+const char *stos_design_curves(StosCurves *k, double *storage, double b, double U, double damping,
+                               const double *times, const double *amplitudes, int n) {
+    const double bU = b * U, d = damping;
+    double *cumulative = storage, *levels_accel = storage + n, *v_accel = levels_accel + n, *levels_mid = v_accel + n;
+    double *levels_decel = levels_mid + n, *v_decel = levels_decel + n, *a = v_decel + n, *c = a + n, *p = c + n;
+    double *q = p + n, *alpha = q + n, *beta = alpha + n;
+    for (int j = 0; j < n; j++) cumulative[j] = exact_sum(amplitudes, j + 1);
+    cumulative[n - 1] = 1.0;
+    double v = 0.0;
+    for (int j = 0; j < n - 1; j++) {
+        double e, g, m;
+        piece(d, (times[j + 1] - times[0]) - (times[j] - times[0]), &e, &g, &m);
+        v = e * v + bU * cumulative[j] * g;
+        v_accel[j] = v;
+        levels_accel[j] = cumulative[j];
+        levels_mid[j] = 1.0 - 2.0 * cumulative[j];
+        levels_decel[j] = cumulative[j] - 1.0;
+    }
+    double x = 0.0;
+    v = 0.0;
+    v_decel[n - 1] = 0.0;
+    for (int j = n - 2; j >= 0; j--) {
+        double e, g, m;
+        piece(d, (times[j + 1] - times[0]) - (times[j] - times[0]), &e, &g, &m);
+        const double level = cumulative[j] - 1.0;
+        v = (v - bU * level * g) / e;
+        x = x - g * v - bU * level * m;
+        v_decel[j] = v;
+    }
+    double ak = 1.0, ck = 0.0, pk = 0.0, qk = 0.0;
+    a[n - 1] = ak, c[n - 1] = ck, p[n - 1] = pk, q[n - 1] = qk;
+    for (int j = n - 2; j >= 0; j--) {
+        double e, g, m;
+        piece(d, (times[j + 1] - times[0]) - (times[j] - times[0]), &e, &g, &m);
+        const double level = 1.0 - 2.0 * cumulative[j];
+        const double a1 = ak * e, c1 = ak * bU * level * g + ck, p1 = pk * e - g, q1 = pk * bU * level * g + qk - bU * level * m;
+        ak = a1, ck = c1, pk = p1, qk = q1;
+        a[j] = ak, c[j] = ck, p[j] = pk, q[j] = qk;
+    }
+    k->n = n, k->b = b, k->U = U, k->damping = d, k->x_base = x;
+    k->levels_accel = levels_accel, k->v_accel = v_accel, k->levels_mid = levels_mid, k->levels_decel = levels_decel;
+    k->v_decel = v_decel, k->a = a, k->c = c, k->p = p, k->q = q;
+    k->quadratic = d == 0.0;
+    /* the quadratics of the middle curves without damping: gamma in the storage's last n doubles */
+    double *gamma = beta + n;
+    for (int j = 0; j < n; j++) {
+        alpha[j] = -0.5 / bU;
+        beta[j] = p[j] - c[j] / bU;
+        gamma[j] = x + (pow(v_decel[0], 2) - c[j] * c[j]) / (2.0 * bU) + q[j];
+    }
+    k->alpha = alpha, k->beta = beta, k->gamma = gamma;
+    if (d > 0.0) { /* _min_distance: the shaper must fit what the damped rigid body can use */
+        const double v_peak = bU / d * expm1(d * (times[n - 1] - times[0]));
+        if (v_peak >= bU / d) return "the shaper is longer than the damped rigid body can use: its velocity limit b U / damping is below the peak the shaped move needs";
+    }
+    return NULL;
+}

@@ -17,6 +17,16 @@ typedef struct {
     const double *alpha, *beta, *gamma;                               /* n each */
 } StosCurves;
 
+/* The doubles stos_design_curves stores for a shaper of n impulses. */
+#define STOS_CURVE_DOUBLES(n) (13 * (size_t)(n))
+
+/* runtime/stos.py's stos_curves for the rigid body x'' = -damping x' + b u, |u| <= U, and the
+ * impulses (times strictly increasing, amplitudes > 0 summing to 1, as the closed-form designs
+ * give them): fills curves, its arrays in storage (STOS_CURVE_DOUBLES(n) doubles, owned by the
+ * caller). Returns NULL, or why the shaper does not suit this rigid body (as _min_distance). */
+const char *stos_design_curves(StosCurves *curves, double *storage, double b, double U, double damping,
+                               const double *times, const double *amplitudes, int n);
+
 typedef struct {
     double kp, kd, ki, ts, x_enter, v_enter, x_exit, v_exit;
 } StosSettle;
