@@ -87,6 +87,19 @@ def test_equals_the_twin_in_libcosim_and_ecos(generators):
         np.testing.assert_allclose(run(native, inputs, 1e-3, OUTPUTS), reference, rtol=0, atol=1e-12)
 
 
+@pytest.mark.parametrize("changed", [
+    {"distance": 0.8, "acceleration_limit": 2.5, "speed": 0.3},            # bang-coast-bang
+    {"shaper": "mzv", "n_modes": 2, "omega[2]": 55.0, "zeta[2]": 0.1},     # another closed-form shaper
+    {"shaper": "zv_dn", "n": 3, "omega[1]": 12.0, "speed": 0.0},
+    {"shaper": "none", "distance": 0.2},
+])
+def test_a_bang_bang_is_re_designed_in_c_as_on_the_twin(generators, changed):
+    native, twin = generators["shaped bang-bang"]
+    runs = [run_fmpy(fmu, [{}] * 4000, 1e-3, OUTPUTS, start_values=changed) for fmu in (native, twin)]
+    assert runs[0] == runs[1]
+    assert runs[1][-1][0] == pytest.approx(changed.get("distance", 0.5), rel=1e-9)  # the move it was asked for
+
+
 def test_t_start_may_change_before_initialisation_as_on_the_twin(generators):
     native, twin = generators["shaped bang-bang"]
     runs = [run_fmpy(fmu, [{}] * 2000, 1e-3, OUTPUTS, start_values={"t_start": 0.3}) for fmu in (native, twin)]
@@ -110,8 +123,9 @@ def test_equals_the_twin_in_the_c_host_with_drifting_time_and_exit_handler_teard
     ({"profile": "TP"}, "profile is BC:TZ in this native FMU"),
     ({"null": 3}, "null is 2 in this native FMU"),
     ({"t_start": float("inf")}, "t_start must be finite, got inf"),
+    ({"speed": -1.0}, "speed is 0.69999999999999996 in this native FMU"),  # a twin-pulse build: its design stays
 ])
-def test_design_parameters_keep_their_build_values(generators, capfd, starts, words):
+def test_design_parameters_of_a_twin_pulse_keep_their_build_values(generators, capfd, starts, words):
     from fmpy.fmi1 import FMICallException
 
     native, _ = generators["twin-pulse"]
@@ -122,6 +136,24 @@ def test_design_parameters_keep_their_build_values(generators, capfd, starts, wo
         set_start_values(slave, variable_references(native), starts)
     slave.freeInstance()
     assert refused.value.status == 3 and words in capfd.readouterr().out
+
+
+@pytest.mark.parametrize(("starts", "words"), [
+    ({"speed": -1.0}, "speed must be >= 0 (0: no speed limit), got -1"),
+    ({"shaper": "ei"}, "shaper must be none or a kind this FMU designs in C (zv, zvd, zvdd, zv_dn, mzv), got ei"),
+    ({"profile": "TP"}, "profile is bang-bang in this native FMU"),
+])
+def test_a_bang_bang_refuses_what_it_cannot_re_design(generators, capfd, starts, words):
+    from fmpy.fmi1 import FMICallException
+
+    native, _ = generators["shaped bang-bang"]
+    slave = fmpy_slave(native, "bad")
+    slave.setupExperiment(startTime=0.0)
+    slave.enterInitializationMode()
+    with pytest.raises(FMICallException):
+        set_start_values(slave, variable_references(native), starts)
+    slave.freeInstance()
+    assert words in capfd.readouterr().out
 
 
 def test_a_move_larger_than_the_bound_is_refused_before_any_c_is_written(tmp_path, monkeypatch):

@@ -1,9 +1,12 @@
 /* The native profile generator behind the generic FMI 2.0 layer: the C twin of the pythonfmu
  * ProfileGenerator, runtime/motion.py's PiecewiseAcceleration.state operation for operation.
  *
- * The move (twin-pulse, time-frequency or shaped bang-bang) is designed at build time
- * (motion_model.h), so every design parameter keeps its build value (another value is refused with
- * a message saying to rebuild); t_start may change before initialisation. The move starts at
+ * A twin-pulse or time-frequency move is designed at build time (motion_model.h), so its design
+ * parameters keep their build values (another value is refused with a message saying to rebuild).
+ * A shaped bang-bang is closed-form: it is re-designed in C at the exit of initialisation
+ * (motion_design.c) from distance, speed and acceleration_limit, and, if its shaper is none or a
+ * closed-form kind (zv, zvd, zvdd, zv_dn, mzv), from shaper, n, n_modes, omega[i] and zeta[i]
+ * (shaper_designs.c), as the pythonfmu FMU does; t_start may change before initialisation. The move starts at
  * t_start, or earlier at the first communication point where the input start is >= 0.5 (a rising
  * start latches); the outputs at a communication point t are the move's exact state at t minus its
  * start. Setting start high after initialisation starts the move at that instant, where the
@@ -14,10 +17,16 @@
 #include <string.h>
 
 #include "motion_model.h"
+#include "shaper_designs.h"
+
+/* Impulses of a shaper re-designed in C (the product over the modes of each mode's). */
+#define MAX_IMPULSES 4096
 
 typedef struct {
     long long started, has_start;  /* initialised; the move has started, at started_at */
     double started_at;
+    MotionPath path;               /* the move played: the build's, or re-designed in storage */
+    double *storage;
     size_t vr[MOTION_MEANINGS];
 } Generator;
 
@@ -25,11 +34,11 @@ static Generator *generator_of(const Fmi2Instance *inst) { return (Generator *)i
 
 
 /* (position, velocity, acceleration) at t; the acceleration is right-continuous. */
-static void state_at(double t, double *out) {
-    const double *breaks = motion_path.breaks;
-    const size_t n = motion_path.n_levels;
+static void state_at(const MotionPath *path, double t, double *out) {
+    const double *breaks = path->breaks;
+    const size_t n = path->n_levels;
     /* k = bisect_right(breaks, t + tolerance) - 1 */
-    const double key = t + motion_path.tolerance;
+    const double key = t + path->tolerance;
     size_t low = 0, high = n + 1;
     while (low < high) {
         const size_t mid = low + (high - low) / 2;
@@ -43,17 +52,17 @@ static void state_at(double t, double *out) {
     const size_t k = low - 1;
     if (k >= n) {
         const double s = t - breaks[n];
-        out[0] = motion_path.position[n] + motion_path.velocity[n] * s, out[1] = motion_path.velocity[n], out[2] = 0.0;
+        out[0] = path->position[n] + path->velocity[n] * s, out[1] = path->velocity[n], out[2] = 0.0;
         return;
     }
-    const double s = t - breaks[k], a = motion_path.levels[k], v = motion_path.velocity[k];
-    out[0] = motion_path.position[k] + v * s + 0.5 * a * s * s, out[1] = v + a * s, out[2] = a;
+    const double s = t - breaks[k], a = path->levels[k], v = path->velocity[k];
+    out[0] = path->position[k] + v * s + 0.5 * a * s * s, out[1] = v + a * s, out[2] = a;
 }
 
 static void update(Fmi2Instance *inst, double t) {
     const Generator *g = generator_of(inst);
     double out[3] = {0.0, 0.0, 0.0};
-    if (g->has_start) state_at(t - g->started_at, out);
+    if (g->has_start) state_at(&g->path, t - g->started_at, out);
     inst->reals[g->vr[MOTION_POSITION]] = out[0];
     inst->reals[g->vr[MOTION_VELOCITY]] = out[1];
     inst->reals[g->vr[MOTION_ACCELERATION]] = out[2];
@@ -79,8 +88,16 @@ Fmi2Role model_variable(const Fmi2Instance *inst, Fmi2Type type, size_t vr, cons
     return twin_variable(&motion_variables, vr, name);
 }
 
+static void release_path(Fmi2Instance *inst) {
+    Generator *g = generator_of(inst);
+    fmi2_release(inst, g->storage);
+    g->storage = NULL;
+    g->path = motion_path;
+}
+
 void model_reset(Fmi2Instance *inst) {
     twin_reset(&motion_variables, inst);
+    release_path(inst);
     Generator *g = generator_of(inst);
     g->started = g->has_start = 0;
     g->started_at = 0.0;
@@ -92,17 +109,68 @@ int model_instantiate(Fmi2Instance *inst) {
     memset(g, 0, sizeof *g);
     inst->model = g;
     twin_index(&motion_variables, g->vr, MOTION_MEANINGS);
+    g->path = motion_path;
     model_reset(inst);
     return 0;
 }
 
 void model_free(Fmi2Instance *inst) {
+    if (inst->model == NULL) return;
+    release_path(inst);
     fmi2_release(inst, inst->model);
     inst->model = NULL;
 }
 
+static double real_of(const Fmi2Instance *inst, int meaning) { return inst->reals[generator_of(inst)->vr[meaning]]; }
+static int integer_of(const Fmi2Instance *inst, int meaning) {
+    return inst->integers[generator_of(inst)->vr[meaning] - motion_variables.n_real];
+}
+
+/* A bang-bang build's move for the parameters now (shaped_bang_bang.py): its shaper re-designed
+ * if closed-form (none: one impulse), else the build's impulses. */
+static fmi2Status design(Fmi2Instance *inst, const char *function) {
+    Generator *g = generator_of(inst);
+    double omega[MOTION_MAX_MODES], zeta[MOTION_MAX_MODES];
+    int count = motion_shaper.count;
+    const double *times = motion_shaper.times, *amplitudes = motion_shaper.amplitudes;
+    double *work = fmi2_allocate(inst, 4 * MAX_IMPULSES + 2, sizeof(double)); /* impulses, and their design's scratch */
+    if (work == NULL) return fmi2_fail(inst, "%s: out of memory for the move's design", function);
+    if (motion_shaper.closed_form) {
+        const char *shaper = fmi2_string(inst, g->vr[MOTION_SHAPER]);
+        double *t = work, *a = work + MAX_IMPULSES;
+        if (strcmp(shaper, "none") == 0) {
+            t[0] = 0.0, a[0] = 1.0, count = 1;
+        } else {
+            const int n_modes = integer_of(inst, MOTION_MODES);
+            for (int j = 0; j < n_modes; j++) omega[j] = real_of(inst, MOTION_OMEGA1 + j), zeta[j] = real_of(inst, MOTION_ZETA1 + j);
+            count = design_closed_form(closed_form_kind(shaper), integer_of(inst, MOTION_ORDER), n_modes, omega, zeta, t, a,
+                                       MAX_IMPULSES, work + 2 * MAX_IMPULSES);
+            if (count < 0) {
+                fmi2_release(inst, work);
+                return fmi2_fail(inst, "%s: shaper %s for %d modes has more than %d impulses", function, shaper, n_modes,
+                                 MAX_IMPULSES);
+            }
+        }
+        times = t, amplitudes = a;
+    }
+    release_path(inst);
+    g->storage = fmi2_allocate(inst, MOTION_DOUBLES(count), sizeof(double));
+    double *scratch = fmi2_allocate(inst, 4 * (size_t)count, sizeof(double));
+    if (g->storage == NULL || scratch == NULL) {
+        fmi2_release(inst, scratch);
+        fmi2_release(inst, work);
+        return fmi2_fail(inst, "%s: out of memory for the move", function);
+    }
+    motion_shaped_bang_bang(&g->path, g->storage, scratch, real_of(inst, MOTION_DISTANCE),
+                            real_of(inst, MOTION_ACCELERATION_LIMIT), real_of(inst, MOTION_SPEED), times, amplitudes, count);
+    fmi2_release(inst, scratch);
+    fmi2_release(inst, work);
+    return fmi2OK;
+}
+
 fmi2Status model_exit_initialization(Fmi2Instance *inst) {
     Generator *g = generator_of(inst);
+    if (motion_shaper.bang_bang && design(inst, "fmi2ExitInitializationMode") != fmi2OK) return fmi2Error;
     g->has_start = 0;
     maybe_start(inst, inst->time);
     update(inst, inst->time);
@@ -133,10 +201,26 @@ static fmi2Status keeps(Fmi2Instance *inst, const TwinVariable *v, const char *g
     return twin_refuse(inst, v, given, "move is", "shapefmu build profile --native", function);
 }
 
+/* Whether the parameter of this meaning is re-designed in C (else it keeps its build value). */
+static int redesigned(int m) {
+    if (!motion_shaper.bang_bang) return 0;
+    if (m == MOTION_DISTANCE || m == MOTION_SPEED || m == MOTION_ACCELERATION_LIMIT) return 1;
+    return motion_shaper.closed_form && m >= MOTION_SHAPER && m <= MOTION_ZETA4;
+}
+
 fmi2Status model_check_real(Fmi2Instance *inst, size_t vr, double value, const char *function) {
     const TwinVariable *v = &motion_variables.variables[vr];
+    const int m = v->meaning;
     if (!isfinite(value)) return fmi2_fail(inst, "%s: %s must be finite, got %g", function, v->name, value);
-    if (v->meaning != MOTION_DESIGN) return fmi2OK;
+    if (m == MOTION_T_START || m == MOTION_START || m >= MOTION_POSITION) return fmi2OK;
+    if (redesigned(m)) {
+        const char *valid = (m == MOTION_DISTANCE || m == MOTION_ACCELERATION_LIMIT || (m >= MOTION_OMEGA1 && m <= MOTION_OMEGA4))
+                            && !(value > 0.0) ? "> 0"
+                            : m == MOTION_SPEED && !(value >= 0.0) ? ">= 0 (0: no speed limit)"
+                            : m >= MOTION_ZETA1 && !(value >= 0.0 && value < 1.0) ? "in [0, 1)" : NULL;
+        if (valid != NULL) return fmi2_fail(inst, "%s: %s must be %s, got %g", function, v->name, valid, value);
+        return fmi2OK;
+    }
     char given[32];
     snprintf(given, sizeof given, "%.17g", value);
     return keeps(inst, v, given, value == v->start, function);
@@ -144,6 +228,13 @@ fmi2Status model_check_real(Fmi2Instance *inst, size_t vr, double value, const c
 
 fmi2Status model_check_integer(Fmi2Instance *inst, size_t vr, int value, const char *function) {
     const TwinVariable *v = &motion_variables.variables[vr];
+    if (redesigned(v->meaning)) {
+        if (v->meaning == MOTION_ORDER && (value < 0 || value > 62))
+            return fmi2_fail(inst, "%s: n must be an integer in [0, 62], got %d", function, value);
+        if (v->meaning == MOTION_MODES && (value < 1 || value > MOTION_MAX_MODES))
+            return fmi2_fail(inst, "%s: n_modes must be in [1, %d], got %d", function, MOTION_MAX_MODES, value);
+        return fmi2OK;
+    }
     char given[32];
     snprintf(given, sizeof given, "%d", value);
     return keeps(inst, v, given, value == (int)v->start, function);
@@ -151,6 +242,12 @@ fmi2Status model_check_integer(Fmi2Instance *inst, size_t vr, int value, const c
 
 fmi2Status model_check_string(Fmi2Instance *inst, size_t vr, const char *value, const char *function) {
     const TwinVariable *v = &motion_variables.variables[vr];
+    if (redesigned(v->meaning)) {
+        if (strcmp(value, "none") == 0 || closed_form_kind(value) != KIND_NOT_CLOSED_FORM) return fmi2OK;
+        return fmi2_fail(inst, "%s: shaper must be none or a kind this FMU designs in C (zv, zvd, zvdd, zv_dn, mzv), "
+                         "got %s; other kinds are designed at build time: shapefmu build profile --native --param "
+                         "shaper=%s", function, value, value);
+    }
     return keeps(inst, v, value, strcmp(value, v->string_start) == 0, function);
 }
 
@@ -200,5 +297,7 @@ int model_restore_state(Fmi2Instance *inst, const unsigned char *bytes, size_t s
         || (saved.has_start != 0 && saved.has_start != 1) || !isfinite(saved.started_at))
         return -1;
     g->started = saved.started, g->has_start = saved.has_start, g->started_at = saved.started_at;
+    /* a re-designed move follows from the parameters the layer has just restored */
+    if (saved.started && motion_shaper.bang_bang && design(inst, "fmi2SetFMUstate") != fmi2OK) return -1;
     return 0;
 }
