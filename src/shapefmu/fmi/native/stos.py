@@ -23,8 +23,8 @@ from shapefmu.fmi.native.sampled import CLOSED_FORM
 from shapefmu.fmi.python.builder import designed_slave
 
 NAME = "STOSController"
-SOURCES = ("stos_fmi2.c", "stos_law.c", "sample_clock.c", "shaper_designs.c", "twin_variables.c")
-HEADERS = ("stos_model.h", "stos_law.h", "sample_clock.h", "shaper_designs.h", "twin_variables.h")
+SOURCES = ("stos_fmi2.c", "stos_law.c", "exact_sum.c", "sample_clock.c", "shaper_designs.c", "twin_variables.c")
+HEADERS = ("stos_model.h", "stos_law.h", "exact_sum.h", "sample_clock.h", "shaper_designs.h", "twin_variables.h")
 _MEANINGS = {"b": "STOS_B", "U": "STOS_U", "damping": "STOS_DAMPING", "kind": "STOS_KIND", "n": "STOS_ORDER",
              "n_modes": "STOS_MODES", **{f"f[{i}]": f"STOS_F{i}" for i in range(1, 5)},
              **{f"zeta[{i}]": f"STOS_ZETA{i}" for i in range(1, 5)}, "Ts": "STOS_PERIOD", "settle": "STOS_SETTLE", "kp": "STOS_KP", "kd": "STOS_KD", "ki": "STOS_KI",

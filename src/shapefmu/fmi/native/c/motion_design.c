@@ -2,48 +2,11 @@
 #include <math.h>
 #include <stdlib.h>
 
+#include "exact_sum.h"
 #include "motion_design.h"
 
 #define MERGE 1e-12 /* breaks closer than this fraction of the move are one (shaped_bang_bang._MERGE) */
 #define SNAP 1e-12  /* PiecewiseAcceleration's snap tolerance, relative */
-
-/* Python's math.fsum of x[0..n): Shewchuk's exact partials, rounded once, as CPython does. */
-static double exact_sum(const double *x, int n) {
-    double partials[128];
-    int used = 0;
-    for (int k = 0; k < n; k++) {
-        double value = x[k];
-        int i = 0;
-        for (int j = 0; j < used; j++) {
-            double y = partials[j];
-            if (fabs(value) < fabs(y)) {
-                const double swap = value;
-                value = y, y = swap;
-            }
-            const double hi = value + y, lo = y - (hi - value);
-            if (lo != 0.0) partials[i++] = lo;
-            value = hi;
-        }
-        used = i;
-        partials[used++] = value;
-    }
-    double hi = 0.0;
-    if (used > 0) {
-        double lo = 0.0;
-        hi = partials[--used];
-        while (used > 0) {
-            const double value = hi, y = partials[--used];
-            hi = value + y;
-            lo = y - (hi - value);
-            if (lo != 0.0) break;
-        }
-        if (used > 0 && ((lo < 0.0 && partials[used - 1] < 0.0) || (lo > 0.0 && partials[used - 1] > 0.0))) {
-            const double y = lo * 2.0, value = hi + y;
-            if (y == value - hi) hi = value;
-        }
-    }
-    return hi;
-}
 
 static int ascending(const void *x, const void *y) {
     const double a = *(const double *)x, b = *(const double *)y;

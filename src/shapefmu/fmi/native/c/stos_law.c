@@ -4,6 +4,7 @@
 #include <math.h>
 #include <stddef.h>
 
+#include "exact_sum.h"
 #include "stos_law.h"
 
 typedef struct {
@@ -167,44 +168,6 @@ double stos_control(const StosCurves *curves, const StosSettle *settle, StosStat
 }
 
 /* ---------------------------------------------------------------- the curves (runtime/stos.py stos_curves) */
-
-/* Python's math.fsum of x[0..n): Shewchuk's exact partials, rounded once, as CPython does. */
-static double exact_sum(const double *x, int n) {
-    double partials[128];
-    int used = 0;
-    for (int k = 0; k < n; k++) {
-        double value = x[k];
-        int i = 0;
-        for (int j = 0; j < used; j++) {
-            double y = partials[j];
-            if (fabs(value) < fabs(y)) {
-                const double swap = value;
-                value = y, y = swap;
-            }
-            const double hi = value + y, lo = y - (hi - value);
-            if (lo != 0.0) partials[i++] = lo;
-            value = hi;
-        }
-        used = i;
-        partials[used++] = value;
-    }
-    double hi = 0.0;
-    if (used > 0) {
-        double lo = 0.0;
-        hi = partials[--used];
-        while (used > 0) {
-            const double value = hi, y = partials[--used];
-            hi = value + y;
-            lo = y - (hi - value);
-            if (lo != 0.0) break;
-        }
-        if (used > 0 && ((lo < 0.0 && partials[used - 1] < 0.0) || (lo > 0.0 && partials[used - 1] > 0.0))) {
-            const double y = lo * 2.0, value = hi + y;
-            if (y == value - hi) hi = value;
-        }
-    }
-    return hi;
-}
 
 const char *stos_design_curves(StosCurves *k, double *storage, double b, double U, double damping,
                                const double *times, const double *amplitudes, int n) {
