@@ -82,6 +82,23 @@ MESSAGES: list[str] = []
 _LOG2 = LOG2(lambda env, name, status, category, message: MESSAGES.append(message.decode()))
 
 
+@pytest.fixture(scope="module", autouse=True)
+def fmpys_logger_handed_back():
+    """Host routes fmpy's one native logger proxy (a process-wide slot) to MESSAGES; after this module
+    it points back at fmpy's printer, so that later tests read FMU messages from fmpy's output."""
+    yield
+    from fmpy.fmi2 import fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, printLogMessage
+    from fmpy.logging import addLoggerProxy
+
+    printer = fmi2CallbackFunctions()
+    printer.logger = fmi2CallbackLoggerTYPE(printLogMessage)
+    addLoggerProxy(byref(printer))
+    _HANDED_BACK.append(printer)  # the proxy calls this logger from now on: keep it alive
+
+
+_HANDED_BACK = []
+
+
 class Host:
     """One FMU's library through ctypes; ``messages``: what the FMUs logged since it was made."""
 
