@@ -178,12 +178,14 @@ def test_parameters_set_before_initialisation_act_as_on_the_twin(twins, case, ch
     assert runs[0] == runs[1] and len(set(runs[1])) > 3
 
 
-def test_the_c_host_on_linux64_win64_and_aarch64_gives_the_same_numbers(twins, tmp_path):
-    """With back EMF (the law's log1p and expm1 from each platform's own libm); the host drives the
-    position error with its own sequence (+-1 mm), so the law visits many regions."""
+@pytest.mark.parametrize("case", ["back EMF", "settle"])
+def test_the_c_host_on_linux64_win64_and_aarch64_gives_the_same_numbers(twins, tmp_path, case):
+    """Back EMF: the law's log1p and expm1 from each platform's own libm; settle: the sub-sample
+    blend (bisection on the predicted flow) every sample. The host drives the position error with
+    its own sequence (+-1 mm), so the law visits many regions."""
     from fmpy import read_model_description
 
-    native, _ = twins["back EMF"]
+    native, _ = twins[case]
     vr = {v.name: v.valueReference for v in read_model_description(str(native)).modelVariables}
     outputs = run_on_every_platform(native, f"input {vr['x_r']} 1e-3\noutput {vr['u']}\nrun 800 {TS!r}\n", tmp_path)
     reference = outputs["linux64"]
