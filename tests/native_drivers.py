@@ -40,3 +40,38 @@ def twin_driver(model_header: str, table: str, main: str) -> str:
     """A driver for a twin whose variables are the TwinVariables ``table`` of ``model_header``;
     ``main`` may call vr_of(name)."""
     return (PRELUDE + TWIN_LOOKUP + f'#include "{model_header}"\n#define vr_of(name) vr_in(&{table}, name)\n' + main)
+
+
+def replayed_run(path, times, outputs, inputs, save_at=None, replay_inputs=None, parameters=None):
+    """fmpy (``parameters`` set in initialisation) over the communication points ``times`` (a step
+    from t_k to t_k+1), ``inputs(k)`` {name: value} set before step k, ``outputs`` read after it:
+    (rows, replayed rows). With ``save_at``, the FMU state taken before step ``save_at`` (serialised
+    and read back) is restored after the run, and the steps from ``save_at`` on run again with
+    ``replay_inputs(k)``: the replayed rows."""
+    from fmu_drivers import initialised
+
+    slave, vr = initialised(path, parameters)
+    state = None
+
+    def run(first, values_at):
+        rows = []
+        for k in range(first, len(times) - 1):
+            nonlocal state
+            if k == save_at and state is None:
+                taken = slave.getFMUstate()
+                state = slave.deSerializeFMUstate(slave.serializeFMUstate(taken))
+                slave.freeFMUstate(taken)
+            for name, value in values_at(k).items():
+                slave.setReal([vr[name]], [value])
+            slave.doStep(times[k], times[k + 1] - times[k])
+            rows.append(slave.getReal([vr[n] for n in outputs]))
+        return rows
+
+    rows, replayed = run(0, inputs), None
+    if save_at is not None:
+        slave.setFMUstate(state)
+        replayed = run(save_at, replay_inputs)
+        slave.freeFMUstate(state)
+    slave.terminate()
+    slave.freeInstance()
+    return rows, replayed

@@ -2,13 +2,15 @@
 
 Both play the same tables: the CasADi time-optimal input of the disk drive's move (a hold table with
 exact switch instants) and a linear table with a jump; the native y and y_mean equal the pythonfmu
-ones bit for bit in fmpy with steps that land on the switches (t += h) and with random steps, in
-libcosim and ecos, in our C host (t += h, exit-handler teardown), and to 1e-12 on win64 under Wine
-and aarch64 under qemu. Another table is refused with a message, the table's size is bounded at
-build time, and valgrind finds nothing.
+ones bit for bit in fmpy with steps that land on the switches (t += h) and with random steps (an
+FMU state restored mid-run replays them), in libcosim and ecos, in our C host (t += h, exit-handler
+teardown), and to 1e-12 on win64 under Wine and aarch64 under qemu. Another table is refused with a message, the declared start value
+(the table's text, line ends included) is accepted, the table's size is bounded and its text checked
+at build time, and valgrind finds nothing.
 """
 
 import json
+import re
 import shutil
 
 import numpy as np
@@ -17,7 +19,7 @@ from cross_hosts import run_on_every_platform
 from fmpy.validation import validate_fmu
 from fmu_drivers import configured, initialised
 from fmu_signal_drivers import run_ecos, run_fmpy, run_libcosim
-from native_drivers import PRELUDE
+from native_drivers import PRELUDE, replayed_run
 
 from shapefmu.fmi import build_fmu
 from shapefmu.fmi.native import reference
@@ -57,22 +59,50 @@ def test_equals_the_twin_bit_for_bit_on_and_between_the_switches(players, case, 
     assert len({row[0] for row in runs[1]}) > 2  # the table switched
 
 
-def test_equals_the_twin_with_random_steps(players):
-    native, twin = players["linear"]
-    rng = np.random.default_rng(4)
-    steps = rng.uniform(1e-9, 0.07, 300)
+def _random_times(end, seed):
+    """Random communication points over [0, 1.2 end], one step in seven of 1e-15 s."""
+    rng = np.random.default_rng(seed)
+    steps = rng.uniform(1e-9, end / 14, 300)
     steps[::7] = 1e-15
-    times = np.concatenate([[0.0], np.cumsum(steps)])
-    rows = []
+    return np.concatenate([[0.0], np.cumsum(steps)])
+
+
+@pytest.mark.parametrize("case", ["time-optimal", "linear"])
+def test_equals_the_twin_with_random_steps_and_a_restored_state(players, case, time_optimal_solution):
+    """Random steps straddle and end near the switches; the FMU state taken at step 120, restored
+    after the run, replays the steps from there as the twin runs them."""
+    native, twin = players[case]
+    times = _random_times(time_optimal_solution.T if case == "time-optimal" else 1.0, 4)
+    still = lambda k: {}  # noqa: E731
+    rows, replayed = replayed_run(native, times, OUTPUTS, still, 120, still)
+    twin_rows, _ = replayed_run(twin, times, OUTPUTS, still)
+    assert rows == twin_rows and replayed == twin_rows[120:]
+    assert len({row[0] for row in twin_rows}) > 2 and any(row[0] != row[1] for row in twin_rows)  # switched in steps
+
+
+def test_the_declared_table_start_value_reads_back_as_the_fmu_holds_it(players, time_optimal_solution):
+    """A solution's JSON (to_json, as ``build reference solution.json`` bakes it) spans lines: the
+    modelDescription start value keeps its line ends, so a host setting the declared start value
+    (fmpy, an SSP binding) gets the table, not fmi2Error."""
+    from fmpy import read_model_description
+
+    native, twin = players["time-optimal"]
+    text = time_optimal_solution.to_json()
+    assert "\n" in text
     for fmu in (native, twin):
-        slave, vr = initialised(fmu)
-        out = []
-        for t, t_next in zip(times[:-1], times[1:]):
-            slave.doStep(t, t_next - t)
-            out.append(slave.getReal([vr["y"], vr["y_mean"]]))
-        slave.freeInstance()
-        rows.append(out)
-    assert rows[0] == rows[1]
+        assert [v.start for v in read_model_description(str(fmu)).modelVariables if v.name == "table"] == [text]
+    h = time_optimal_solution.T / 100
+    runs = [run_fmpy(fmu, [{}] * 120, h, OUTPUTS, start_values={"table": text}) for fmu in (native, twin)]
+    assert runs[0] == runs[1] and len({row[0] for row in runs[1]}) > 2
+
+
+@pytest.mark.parametrize(("character", "code"), [("\uffff", "U+FFFF"), ("\ufffe", "U+FFFE"), ("\ud800", "U+D800")])
+def test_a_table_text_xml_cannot_hold_is_refused_before_any_c_is_written(tmp_path, character, code):
+    text = LINEAR[:-1] + f', "note": "{character}"}}'
+    words = f"table: its value holds the character {code} at position {len(text) - 3}, which XML 1.0 (modelDescription"
+    with pytest.raises(ValueError, match=re.escape(words)):
+        build_native_reference(tmp_path / "Bad.fmu", table=text)
+    assert not (tmp_path / "Bad.fmu").exists()
 
 
 def test_equals_the_twin_in_libcosim_and_ecos(players):

@@ -8,11 +8,30 @@ the FMU does: no external tool, state get/set and serialisation.
 """
 
 import datetime
-from xml.dom import minidom
-from xml.etree.ElementTree import Element, SubElement, tostring
+import re
+from xml.etree.ElementTree import Element, SubElement, indent, tostring
 
 from shapefmu import __version__
 from shapefmu.fmi.python.slave_base import UNITS
+
+
+# Characters outside XML 1.0's Char production (section 2.2): no reference can write them either.
+_NOT_XML = re.compile("[^\t\n\r\x20-\ud7ff\ue000-\ufffd\U00010000-\U0010ffff]")
+
+
+def check_xml_string(value, owner, what="value"):
+    """Refuse a string XML 1.0 cannot hold (a String start value from a user's file), naming ``owner``."""
+    bad = _NOT_XML.search(value)
+    if bad:
+        raise ValueError(f"{owner}: its {what} holds the character U+{ord(bad.group()):04X} at position {bad.start()}, "
+                         f"which XML 1.0 (modelDescription.xml) cannot hold")
+
+
+def _check_xml_text(root):
+    owners = {child: variable.get("name") for variable in root.iter("ScalarVariable") for child in variable}
+    for node in root.iter():
+        for name, value in node.attrib.items():
+            check_xml_string(value, owners.get(node, node.get("name", node.tag)), f"{name} value")
 
 
 def _number(value):
@@ -128,5 +147,9 @@ def model_description(slave, guid, dependencies, experiment, pythonfmu_version, 
             # At initialisation the design itself depends on every parameter.
             inputs = sorted(parameters + [index[name] for name in dependencies[var.name]])
             SubElement(node, "Unknown", {"index": str(index[var.name]), "dependencies": " ".join(map(str, inputs))})
-    text = minidom.parseString(tostring(root, encoding="unicode")).toprettyxml(indent="  ", encoding="UTF-8")
-    return text.decode("utf-8")
+    _check_xml_text(root)
+    # ElementTree writes tabs and line ends in attribute values as character references, so a
+    # String start value (a table's JSON text) reads back exactly as the FMU holds it; a literal
+    # line end would read back as a space (attribute-value normalisation, XML 1.0 section 3.3.3).
+    indent(root, space="  ")
+    return '<?xml version="1.0" encoding="UTF-8"?>\n' + tostring(root, encoding="unicode") + "\n"
