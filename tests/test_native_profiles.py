@@ -4,7 +4,8 @@ Three families (a twin-pulse kind of paper 003, time-frequency of paper 004, a Z
 of paper 002 starting at t_start): position, velocity and acceleration equal the pythonfmu ones bit
 for bit in fmpy with a step that divides the breaks (t += h) and with random steps, with the move
 started by the start input after initialisation (acceleration feeding through from it), in
-libcosim and ecos, in our C host, and to 1e-12 on win64 under Wine and aarch64 under qemu. Design
+libcosim and ecos, in our C host, and to 1e-12 on win64 under Wine and aarch64 under qemu. A
+restored FMU state (before and after the start latched) replays as the twin runs. Design
 parameters refuse another value, t_start may change, and valgrind finds nothing.
 """
 
@@ -16,7 +17,7 @@ from cross_hosts import run_on_every_platform
 from fmpy.validation import validate_fmu
 from fmu_drivers import fmpy_slave, initialised, set_start_values, variable_references
 from fmu_signal_drivers import run_ecos, run_fmpy, run_libcosim
-from native_drivers import twin_driver
+from native_drivers import replayed_run, twin_driver
 
 from shapefmu.fmi import build_fmu
 from shapefmu.fmi.native import profiles
@@ -72,11 +73,29 @@ def test_equals_the_twin_with_random_steps_and_a_start_input(generators):
     steps = rng.uniform(1e-9, 3e-3, 1500)
     steps[::9] = 1e-15
     times = np.concatenate([[0.0], np.cumsum(steps)])
-    for case in ("twin-pulse", "time-frequency"):
+    for case in CASES:
         native, twin = generators[case]
         rows = [_random_run(fmu, times, 0.4) for fmu in (native, twin)]
         assert rows[0] == rows[1]
         assert any(r[2] != 0.0 for r in rows[1])
+
+
+@pytest.mark.parametrize(("save_at", "replay_start"), [(200, 500), (400, 300)])
+def test_a_restored_fmu_state_replays_as_the_twin_runs(generators, save_at, replay_start):
+    """The state is taken before the start input rises at step 300 (the replay starts the move at
+    step 500 instead) or in the middle of the move (the replay runs it on): the replayed rows are
+    the native FMU's own and the twin's uninterrupted run with the replay's start."""
+    native, twin = generators["twin-pulse"]
+    rng = np.random.default_rng(3)
+    times = np.concatenate([[0.0], np.cumsum(rng.uniform(1e-6, 3e-3, 1500))])
+    starting = lambda at: lambda k: {"start": float(k >= at)}  # noqa: E731
+    waiting = {"t_start": -1.0}
+    rows, replayed = replayed_run(native, times, OUTPUTS, starting(300), save_at, starting(replay_start), waiting)
+    twin_rows, _ = replayed_run(twin, times, OUTPUTS, starting(300), parameters=waiting)
+    twin_replay, _ = replayed_run(twin, times, OUTPUTS, starting(replay_start), parameters=waiting)
+    assert rows == twin_rows and replayed == twin_replay[save_at:]
+    assert replayed[0] == twin_rows[save_at] and (replayed != rows[save_at:]) == (replay_start != 300)
+    assert twin_replay[replay_start - 1][0] == 0.0 and twin_replay[replay_start][2] != 0.0  # the latch moved
 
 
 def test_equals_the_twin_in_libcosim_and_ecos(generators):
