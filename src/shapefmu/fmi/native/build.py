@@ -14,20 +14,16 @@ from pathlib import Path
 from shapefmu.fmi.documentation import add_documentation
 from shapefmu.fmi.native import description, description3, linear
 from shapefmu.fmi.native.codegen import write_sources
-from shapefmu.fmi.native.compile import LAYER_HEADERS, LAYER_SOURCES, build_binaries, build_description, copy_c_files, zip_fmu
+from shapefmu.fmi.native.compile import build_binaries, build_description, copy_c_files, layer_files, zip_fmu
 from shapefmu.fmi.native.model_part import ModelPart, check_name
 from shapefmu.fmi.native.nonlinear import NonlinearPlant
 from shapefmu.plants import as_plant
 from shapefmu.runtime.checks import check_size, read_text_file
 
-# The hand-written C shipped with every plant FMU (package data in fmi/native/c/): the generic FMI
-# 2.0 layer and the plants' part of it.
-WRAPPER_SOURCES = (*LAYER_SOURCES, "plant_fmi2.c", "plant_expm.c")
-WRAPPER_HEADERS = (*LAYER_HEADERS, "plant_model.h", "plant_expm.h")
-# The FMI 3.0 target: the same model part and numerics behind an FMI 3.0 wrapper.
-WRAPPER_SOURCES_3 = ("plant_fmi3.c", "plant_fmi3_refused.c", "plant_expm.c", "fmu_liveness.c")
-WRAPPER_HEADERS_3 = ("plant_model.h", "plant_expm.h", "plant_fmi3.h", "fmu_liveness.h")
-FMI_VERSIONS = ("2.0", "3.0")
+# The hand-written C shipped with every plant FMU (package data in fmi/native/c/) besides the generic
+# layer of its FMI version: the plants' model part.
+PLANT_SOURCES = ("plant_fmi2.c", "plant_expm.c")
+PLANT_HEADERS = ("plant_model.h", "plant_expm.h")
 
 
 def _check_states(count: int, what: str) -> None:
@@ -85,11 +81,8 @@ def build_plant_fmu(model, out_path, *, name: str | None = None, fmi_version: st
     ``fmi_version`` is "2.0" (default) or "3.0" (the same variables as Float64, the same
     Co-Simulation step: the two give identical numbers).
     """
-    if fmi_version not in FMI_VERSIONS:
-        raise ValueError(f"fmi_version must be one of {FMI_VERSIONS}, got {fmi_version!r}")
-    fmi3 = fmi_version == "3.0"
-    wrapper_sources = WRAPPER_SOURCES_3 if fmi3 else WRAPPER_SOURCES
-    describe = description3.model_description if fmi3 else description.model_description
+    layer_sources, layer_headers = layer_files(fmi_version)
+    wrapper_sources = (*layer_sources, *PLANT_SOURCES)
     out_path = Path(out_path)
     if out_path.is_dir():
         raise ValueError(f"out_path {str(out_path)!r} is a folder; give the FMU file to write, e.g. {out_path / 'Plant.fmu'}")
@@ -99,7 +92,7 @@ def build_plant_fmu(model, out_path, *, name: str | None = None, fmi_version: st
         root = Path(tmp)
         sources = root / "sources"
         sources.mkdir()
-        copy_c_files(sources, wrapper_sources + (WRAPPER_HEADERS_3 if fmi3 else WRAPPER_HEADERS))
+        copy_c_files(sources, wrapper_sources + layer_headers + PLANT_HEADERS)
         # The GUID hashes the sources, which include the GUID: generate with a placeholder first.
         generated = write_sources(part, "", sources)
         c_files = [*wrapper_sources, *generated]
@@ -109,10 +102,20 @@ def build_plant_fmu(model, out_path, *, name: str | None = None, fmi_version: st
         note = build_binaries(root, identifier, c_files, f"plant {part.name}", fmi_version)
         if note:
             print(note, file=sys.stderr)
-        (root / "modelDescription.xml").write_text(describe(part, guid, tuple(c_files)), encoding="utf-8")
+        xml = (description.model_description(part, guid, tuple(c_files)) if fmi_version == "2.0"
+               else _description3(part, identifier, guid))
+        (root / "modelDescription.xml").write_text(xml, encoding="utf-8")
         add_documentation(root, _about(part))
         zip_fmu(root, out_path)
     return out_path
+
+
+def _description3(part: ModelPart, identifier: str, token: str) -> str:
+    return description3.model_description3(
+        model_name=part.name, identifier=identifier, token=token, description=part.description,
+        slots=description3.plant_slots(part), dependencies=description3.plant_dependencies(part),
+        log_categories=[(c, "") for c in description.LOG_CATEGORIES], model_exchange=True,
+        directional_derivatives=True, generation_tool="plant generator")
 
 
 def fmu_file_name(model_name: str) -> str:

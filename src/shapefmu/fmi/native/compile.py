@@ -36,9 +36,22 @@ from pathlib import Path
 
 from shapefmu.fmi.compiler import run_compiler
 
-# The generic FMI 2.0 layer, shipped in every native FMU's sources/.
-LAYER_SOURCES = ("fmi2_layer.c", "fmi2_layer_state.c", "fmi2_layer_me.c", "fmu_liveness.c")
-LAYER_HEADERS = ("fmi2_model.h", "fmi2_layer.h", "fmu_liveness.h")
+# The generic FMI layers, one of them shipped in every native FMU's sources/: the version-neutral core
+# and the API of FMI 2.0 or 3.0 over it (layer_files).
+_CORE_SOURCES = ("layer_core.c", "layer_state.c", "fmu_liveness.c")
+_CORE_HEADERS = ("fmi2_model.h", "model_status.h", "layer_core.h", "fmu_liveness.h")
+LAYER_SOURCES = ("fmi2_layer.c", "fmi2_layer_me.c", *_CORE_SOURCES)
+LAYER_HEADERS = ("fmi2_layer.h", *_CORE_HEADERS)
+FMI_VERSIONS = ("2.0", "3.0")
+
+
+def layer_files(fmi_version: str) -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """The C sources and headers of the generic layer of ``fmi_version`` ("2.0" or "3.0")."""
+    if fmi_version not in FMI_VERSIONS:
+        raise ValueError(f"fmi_version must be one of {', '.join(FMI_VERSIONS)}, got {fmi_version!r}")
+    if fmi_version == "2.0":
+        return LAYER_SOURCES, LAYER_HEADERS
+    return ("fmi3_layer.c", "fmi3_layer_me.c", *_CORE_SOURCES), ("fmi3_layer.h", *_CORE_HEADERS)
 # The standard's own headers: compiled against, never shipped in sources/ (the importing tool has
 # them, and the FMI standard asks for them to be left out).
 STANDARD_HEADERS = ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h",

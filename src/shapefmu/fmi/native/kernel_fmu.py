@@ -21,7 +21,8 @@ from pathlib import Path
 from types import SimpleNamespace
 
 from shapefmu.fmi.documentation import add_documentation
-from shapefmu.fmi.native.compile import LAYER_HEADERS, LAYER_SOURCES, build_binaries, build_description, copy_c_files, zip_fmu
+from shapefmu.fmi.native import description3
+from shapefmu.fmi.native.compile import build_binaries, build_description, copy_c_files, layer_files, zip_fmu
 from shapefmu.fmi.python.model_description import model_description
 from shapefmu.fmi.python.slave_base import Variable
 
@@ -72,7 +73,7 @@ def twin_variables_c(table: str, variables, values: dict, meaning_of, guid: str)
 
 
 def write_native_fmu(name: str, out_path, slave, variables, values: dict, dependencies: dict, c_sources,
-                     c_headers, model_c, about: str, log_categories=CATEGORIES) -> Path:
+                     c_headers, model_c, about: str, log_categories=CATEGORIES, fmi_version: str = "2.0") -> Path:
     """Write the native FMU ``name`` to ``out_path`` and return the path.
 
     ``slave`` is the designed pythonfmu slave (its description and DefaultExperiment); ``variables``
@@ -80,15 +81,17 @@ def write_native_fmu(name: str, out_path, slave, variables, values: dict, depend
     ``dependencies`` maps each output to the inputs it feeds through from; ``c_sources`` and
     ``c_headers`` the model part's files of ``fmi/native/c`` (the generic layer is added here);
     ``model_c(guid)`` the text of the generated model.c; ``about`` the documentation's account of
-    what the FMU does.
+    what the FMU does; ``fmi_version`` "2.0" or "3.0" picks the generic layer and the model description
+    (FMI 3.0: array parameters, see ``description3``).
     """
     out_path = Path(out_path)
-    sources_list = (*LAYER_SOURCES, *c_sources)
+    layer_sources, layer_headers = layer_files(fmi_version)
+    sources_list = (*layer_sources, *c_sources)
     with tempfile.TemporaryDirectory(prefix="shapefmu_native_") as tmp:
         root = Path(tmp)
         sources = root / "sources"
         sources.mkdir()
-        copy_c_files(sources, sources_list + (*LAYER_HEADERS, *c_headers))
+        copy_c_files(sources, sources_list + (*layer_headers, *c_headers))
         c_files = [*sources_list, MODEL_SOURCE]
         digest = hashlib.md5(model_c("").encode())
         for file in sorted(p.name for p in sources.iterdir()):
@@ -96,13 +99,19 @@ def write_native_fmu(name: str, out_path, slave, variables, values: dict, depend
         guid = "{" + str(uuid.UUID(digest.hexdigest())) + "}"
         (sources / MODEL_SOURCE).write_text(model_c(guid), encoding="utf-8")
         (sources / "buildDescription.xml").write_text(build_description(name, c_files), encoding="utf-8")
-        note = build_binaries(root, name, c_files, f"native {name}")
+        note = build_binaries(root, name, c_files, f"native {name}", fmi_version)
         if note:
             print(note, file=sys.stderr)
-        view = SimpleNamespace(model_name=name, variables=variables, values=values,
-                               description=f"{slave.description} (native C, designed at build time)")
-        xml = model_description(view, guid, dependencies, slave.experiment(), "", native_sources=tuple(c_files),
-                                log_categories=log_categories)
+        text = f"{slave.description} (native C, designed at build time)"
+        if fmi_version == "2.0":
+            view = SimpleNamespace(model_name=name, variables=variables, values=values, description=text)
+            xml = model_description(view, guid, dependencies, slave.experiment(), "", native_sources=tuple(c_files),
+                                    log_categories=log_categories)
+        else:
+            xml = description3.model_description3(
+                model_name=name, identifier=name, token=guid, description=text,
+                slots=description3.twin_slots(variables, values), dependencies=dependencies,
+                log_categories=log_categories, experiment=slave.experiment())
         (root / "modelDescription.xml").write_text(xml, encoding="utf-8")
         add_documentation(root, about)
         zip_fmu(root, out_path)

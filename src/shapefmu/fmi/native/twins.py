@@ -24,18 +24,19 @@ TWINS = {
 }
 
 
-def build_native(name: str, out_path, **start_values) -> Path:
-    """The native twin of the pythonfmu FMU ``name`` with ``start_values``, written to ``out_path``."""
+def build_native(name: str, out_path, *, fmi_version: str = "2.0", **start_values) -> Path:
+    """The native twin of the pythonfmu FMU ``name`` with ``start_values``, written to ``out_path`` as
+    an FMI ``fmi_version`` ("2.0" or "3.0") FMU."""
     if name not in TWINS:
         raise ValueError(f"name must be one of {', '.join(TWINS)} (the FMUs with a native C twin), got {name!r}")
     module, builder = TWINS[name]
-    return getattr(importlib.import_module(module), builder)(out_path, **start_values)
+    return getattr(importlib.import_module(module), builder)(out_path, fmi_version=fmi_version, **start_values)
 
 
-def build_all_native(out_dir) -> list[Path]:
+def build_all_native(out_dir, fmi_version: str = "2.0") -> list[Path]:
     """Every native twin with its default start values into ``out_dir``, named as the pythonfmu FMUs."""
     out_dir = Path(out_dir)
-    return [build_native(name, out_dir / f"{name}.fmu") for name in TWINS]
+    return [build_native(name, out_dir / f"{name}.fmu", fmi_version=fmi_version) for name in TWINS]
 
 
 def fingerprint(name: str) -> str:

@@ -1,11 +1,11 @@
-/* The generic FMI 2.0 layer of shapefmu's native FMUs: written once, shared by the plants and the
- * sampled filters (as src/fmi2Functions.c is shared by the FMI Reference FMUs). The model part is
- * whatever implements fmi2_model.h.
+/* The generic FMI 2.0 layer of shapefmu's native FMUs: written once, shared by the plants and every
+ * sampled FMU (as src/fmi2Functions.c is shared by the FMI Reference FMUs). The model part is
+ * whatever implements fmi2_model.h; what FMI 2.0 and 3.0 do alike is in layer_core.c and
+ * layer_state.c, this is FMI 2.0's API over it.
  *
- * This file: instantiation with the host's memory callbacks, logging, the life cycle of the FMI 2.0
- * state machine, get/set of Real, Integer, Boolean and String variables with the causality and
- * variability rules, and the Co-Simulation step. FMU states are in fmi2_layer_state.c, the Model
- * Exchange functions in fmi2_layer_me.c.
+ * This file: instantiation with the host's memory callbacks and logger, the life cycle of the FMI
+ * 2.0 state machine, get/set of Real, Integer, Boolean and String variables, and the Co-Simulation
+ * step. FMU states and the Model Exchange functions are in fmi2_layer_me.c.
  *
  * Any refused call (bad argument, call out of order, a value the model refuses) logs a message
  * naming the function, the variable and the value, returns fmi2Error and puts the instance into
@@ -20,68 +20,14 @@
 
 #include "fmi2_layer.h"
 
-/* ---------------------------------------------------------------- services to the model part */
-
-const char *fmi2_mode_name(Fmi2Mode mode) {
-    switch (mode) {
-    case FMI2_INSTANTIATED: return "Instantiated";
-    case FMI2_INITIALIZATION: return "Initialization Mode";
-    case FMI2_EVENT_MODE: return "Event Mode";
-    case FMI2_CONTINUOUS_TIME: return "Continuous-Time Mode";
-    case FMI2_STEP_COMPLETE: return "Step Complete";
-    case FMI2_TERMINATED: return "Terminated";
-    default: return "Error";
-    }
-}
-
-static void log_message(const Fmi2Instance *inst, fmi2Status status, const char *category, const char *format,
-                        va_list args) {
-    if (inst->callbacks.logger == NULL) return;
-    char message[512];
-    vsnprintf(message, sizeof message, format, args);
-    /* The logger takes a printf-style format: pass the message as an argument, never as format. */
-    inst->callbacks.logger(inst->callbacks.componentEnvironment, inst->name, status, category, "%s", message);
-}
-
-fmi2Status fmi2_fail(Fmi2Instance *inst, const char *format, ...) {
-    va_list args;
-    va_start(args, format);
-    log_message(inst, fmi2Error, "logStatusError", format, args); /* an error is never debug output */
-    va_end(args);
-    inst->mode = FMI2_ERROR_STATE;
-    return fmi2Error;
-}
-
-void fmi2_debug(const Fmi2Instance *inst, const char *format, ...) {
-    if (!inst->logging_on) return;
-    va_list args;
-    va_start(args, format);
-    log_message(inst, fmi2OK, "logAll", format, args);
-    va_end(args);
-}
-
-void *fmi2_allocate(Fmi2Instance *inst, size_t count, size_t size) {
-    return count == 0 ? NULL : inst->callbacks.allocateMemory(count, size);
-}
-
-void fmi2_release(Fmi2Instance *inst, void *pointer) {
-    if (pointer != NULL) inst->callbacks.freeMemory(pointer);
-}
-
-size_t fmi2_string_capacity(const Fmi2Instance *inst) { return inst->info.string_capacity; }
-
-char *fmi2_string(Fmi2Instance *inst, size_t vr) {
-    const size_t first = inst->info.n_real + inst->info.n_integer + inst->info.n_boolean;
-    return inst->strings + (vr - first) * (inst->info.string_capacity + 1);
-}
-
 /* ---------------------------------------------------------------- life cycle */
 
-/* Everything an instance holds but its struct (malloc'ed by the layer, released or retired apart). */
-static void free_buffers(Fmi2Instance *inst) {
-    model_free(inst);
-    void *buffers[] = {inst->name, inst->reals, inst->integers, inst->booleans, inst->strings};
-    for (size_t i = 0; i < sizeof buffers / sizeof buffers[0]; i++) fmi2_release(inst, buffers[i]);
+/* What an FMI 2.0 instance keeps of its host: the callbacks (logger, allocator). */
+static void emit(const Fmi2Instance *inst, int error, const char *category, const char *message) {
+    const fmi2CallbackFunctions *callbacks = inst->layer;
+    if (callbacks->logger == NULL) return;
+    /* The logger takes a printf-style format: pass the message as an argument, never as format. */
+    callbacks->logger(callbacks->componentEnvironment, inst->name, error ? fmi2Error : fmi2OK, category, "%s", message);
 }
 
 static void log_instantiation_error(const fmi2CallbackFunctions *callbacks, fmi2String name, const char *message) {
@@ -115,39 +61,28 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
                                 : "fmuType must be fmi2CoSimulation (this FMU declares no Model Exchange)");
         return NULL;
     }
-    /* The struct from malloc, not the host's allocator: it may be released after the host is gone
-     * (fmu_retire), and its address must not come back soon as another instance's. */
-    Fmi2Instance *inst = calloc(1, sizeof(Fmi2Instance));
-    if (inst == NULL) return NULL;
-    if (info.string_capacity == 0) info.string_capacity = FMI2_STRING_CAPACITY;
-    inst->info = info;
-    inst->callbacks = *functions;
-    inst->type = fmuType;
-    inst->logging_on = loggingOn;
-    inst->mode = FMI2_INSTANTIATED;
-    inst->name = fmi2_allocate(inst, strlen(instanceName) + 1, 1);
-    inst->reals = fmi2_allocate(inst, info.n_real, sizeof(double));
-    inst->integers = fmi2_allocate(inst, info.n_integer, sizeof(int));
-    inst->booleans = fmi2_allocate(inst, info.n_boolean, sizeof(int));
-    inst->strings = fmi2_allocate(inst, info.n_string, info.string_capacity + 1);
-    if (inst->name == NULL || (info.n_real && !inst->reals) || (info.n_integer && !inst->integers)
-        || (info.n_boolean && !inst->booleans) || (info.n_string && !inst->strings) || model_instantiate(inst) != 0) {
+    fmi2CallbackFunctions *callbacks = functions->allocateMemory(1, sizeof(fmi2CallbackFunctions));
+    if (callbacks == NULL) {
         log_instantiation_error(functions, instanceName, "out of memory");
-        free_buffers(inst);
-        free(inst);
         return NULL;
     }
-    strcpy(inst->name, instanceName);
-    fmu_mark_live(inst);
-    fmi2_debug(inst, "fmi2Instantiate: %zu Real, %zu Integer, %zu Boolean, %zu String variables", info.n_real,
-               info.n_integer, info.n_boolean, info.n_string);
+    *callbacks = *functions;
+    Fmi2Instance *inst = core_new(instanceName, fmuType == fmi2ModelExchange, loggingOn, functions->allocateMemory,
+                                  functions->freeMemory, emit, callbacks);
+    if (inst == NULL) {
+        log_instantiation_error(functions, instanceName, "out of memory");
+        functions->freeMemory(callbacks);
+        return NULL;
+    }
     return inst;
 }
 
 void fmi2FreeInstance(fmi2Component c) {
     /* An instance freed already (or never made here) is not touched: see fmu_liveness.h. */
     if (!fmu_mark_freed(c)) return;
-    free_buffers((Fmi2Instance *)c);
+    Fmi2Instance *inst = c;
+    core_free(inst);
+    fmi2_release(inst, inst->layer);
     fmu_retire(c);
 }
 
@@ -170,11 +105,7 @@ fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fm
     REQUIRE(c, FMI2_INSTANTIATED, "fmi2SetupExperiment");
     (void)toleranceDefined;
     (void)tolerance;
-    if (!isfinite(startTime)) return fmi2_fail(inst, "fmi2SetupExperiment: startTime must be finite, got %g", startTime);
-    if (stopTimeDefined && !(stopTime >= startTime))
-        return fmi2_fail(inst, "fmi2SetupExperiment: stopTime must be >= startTime = %g, got %g", startTime, stopTime);
-    inst->time = inst->start_time = startTime;
-    return fmi2OK;
+    return core_setup(inst, startTime, stopTimeDefined, stopTime, "fmi2SetupExperiment");
 }
 
 fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
@@ -185,9 +116,7 @@ fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
 
 fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
     REQUIRE(c, FMI2_INITIALIZATION, "fmi2ExitInitializationMode");
-    if (model_exit_initialization(inst) != fmi2OK) return fmi2Error;
-    inst->mode = inst->type == fmi2ModelExchange ? FMI2_EVENT_MODE : FMI2_STEP_COMPLETE;
-    return fmi2OK;
+    return core_exit_initialization(inst);
 }
 
 fmi2Status fmi2Terminate(fmi2Component c) {
@@ -198,26 +127,11 @@ fmi2Status fmi2Terminate(fmi2Component c) {
 
 fmi2Status fmi2Reset(fmi2Component c) {
     REQUIRE(c, ANY_MODE, "fmi2Reset");
-    inst->time = inst->start_time = 0.0;
-    model_reset(inst);
-    inst->mode = FMI2_INSTANTIATED;
+    core_reset(inst);
     return fmi2OK;
 }
 
 /* ---------------------------------------------------------------- get / set */
-
-static const char *const TYPE_NAMES[] = {"Real", "Integer", "Boolean", "String"};
-
-/* The value references [first, first + count) of a type. */
-static void type_range(const Fmi2Instance *inst, Fmi2Type type, size_t *first, size_t *count) {
-    const Fmi2ModelInfo *info = &inst->info;
-    switch (type) {
-    case FMI2_REAL: *first = 0, *count = info->n_real; return;
-    case FMI2_INTEGER: *first = info->n_real, *count = info->n_integer; return;
-    case FMI2_BOOLEAN: *first = info->n_real + info->n_integer, *count = info->n_boolean; return;
-    default: *first = info->n_real + info->n_integer + info->n_boolean, *count = info->n_string; return;
-    }
-}
 
 /* Every vr is a variable of type; logs the first that is not. */
 static fmi2Status check_references(Fmi2Instance *inst, Fmi2Type type, const fmi2ValueReference vr[], size_t nvr,
@@ -228,42 +142,16 @@ static fmi2Status check_references(Fmi2Instance *inst, Fmi2Type type, const fmi2
         if (i == nvr) return fmi2OK;
     }
     size_t first, count;
-    type_range(inst, type, &first, &count);
+    core_type_range(inst, type, &first, &count);
     for (size_t i = 0; i < nvr; i++) {
         if (vr[i] >= first && vr[i] - first < count) continue;
         if (count == 0)
-            return fmi2_fail(inst, "%s: this FMU has no %s variables (value reference %u)", function, TYPE_NAMES[type],
-                             (unsigned)vr[i]);
-        return fmi2_fail(inst, "%s: no %s variable has value reference %u", function, TYPE_NAMES[type], (unsigned)vr[i]);
+            return fmi2_fail(inst, "%s: this FMU has no %s variables (value reference %u)", function,
+                             CORE_TYPE_NAMES[type], (unsigned)vr[i]);
+        return fmi2_fail(inst, "%s: no %s variable has value reference %u", function, CORE_TYPE_NAMES[type],
+                         (unsigned)vr[i]);
     }
     return fmi2OK;
-}
-
-/* Whether variable vr may be set now (FMI 2.0, tables in 3.2.3 for ME and 4.2.4 for CS). */
-static fmi2Status check_settable(Fmi2Instance *inst, Fmi2Type type, fmi2ValueReference vr, const char *function) {
-    const char *name = "(no variable)";
-    switch (model_variable(inst, type, vr, &name)) {
-    case FMI2_NO_VARIABLE:
-        return fmi2_fail(inst, "%s: no %s variable has value reference %u", function, TYPE_NAMES[type], (unsigned)vr);
-    case FMI2_COMPUTED:
-        return fmi2_fail(inst, "%s: %s is computed by the FMU and cannot be set", function, name);
-    case FMI2_STATE:
-        if (inst->mode & (FMI2_INSTANTIATED | FMI2_INITIALIZATION)) return fmi2OK;
-        return fmi2_fail(inst, "%s: state %s can be set only before initialisation is complete "
-                         "(use fmi2SetContinuousStates or an FMU state), not in %s", function, name,
-                         fmi2_mode_name(inst->mode));
-    case FMI2_INPUT:
-        return fmi2OK;
-    case FMI2_PARAMETER_FIXED:
-        if (inst->mode & (FMI2_INSTANTIATED | FMI2_INITIALIZATION)) return fmi2OK;
-        return fmi2_fail(inst, "%s: parameter %s is fixed and cannot be set after initialisation (in %s)", function,
-                         name, fmi2_mode_name(inst->mode));
-    case FMI2_PARAMETER_TUNABLE:
-        if (inst->mode & (FMI2_INSTANTIATED | FMI2_INITIALIZATION | FMI2_EVENT_MODE | FMI2_STEP_COMPLETE)) return fmi2OK;
-        return fmi2_fail(inst, "%s: tunable parameter %s can be set only in Event Mode or between steps, not in %s",
-                         function, name, fmi2_mode_name(inst->mode));
-    }
-    return fmi2Error;
 }
 
 #define SET_PROLOGUE(type, function)                                                                \
@@ -307,61 +195,37 @@ fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
     SET_PROLOGUE(FMI2_REAL, "fmi2SetReal");
     /* Check every value first, so that a refused call changes nothing. */
     for (size_t i = 0; i < nvr; i++)
-        if (check_settable(inst, FMI2_REAL, vr[i], "fmi2SetReal") != fmi2OK
-            || model_check_real(inst, vr[i], value[i], "fmi2SetReal") != fmi2OK)
-            return fmi2Error;
-    for (size_t i = 0; i < nvr; i++) {
-        if (inst->reals[vr[i]] == value[i]) continue;
-        inst->reals[vr[i]] = value[i];
-        model_changed(inst, vr[i]);
-    }
+        if (core_accept_real(inst, vr[i], value[i], "fmi2SetReal") != fmi2OK) return fmi2Error;
+    for (size_t i = 0; i < nvr; i++) core_store_real(inst, vr[i], value[i]);
     return fmi2OK;
 }
 
-static fmi2Status set_integers(Fmi2Instance *inst, Fmi2Type type, int *values, const fmi2ValueReference vr[],
-                               size_t nvr, const fmi2Integer value[], const char *function) {
-    size_t first, count;
-    type_range(inst, type, &first, &count);
-    for (size_t i = 0; i < nvr; i++) {
-        const int v = type == FMI2_BOOLEAN ? value[i] != fmi2False : value[i];
-        if (check_settable(inst, type, vr[i], function) != fmi2OK || model_check_integer(inst, vr[i], v, function) != fmi2OK)
+static fmi2Status set_integers(Fmi2Instance *inst, Fmi2Type type, const fmi2ValueReference vr[], size_t nvr,
+                               const fmi2Integer value[], const char *function) {
+    for (size_t i = 0; i < nvr; i++)
+        if (core_accept_integer(inst, type, vr[i], type == FMI2_BOOLEAN ? value[i] != fmi2False : value[i], function)
+            != fmi2OK)
             return fmi2Error;
-    }
-    for (size_t i = 0; i < nvr; i++) {
-        const int v = type == FMI2_BOOLEAN ? value[i] != fmi2False : value[i];
-        if (values[vr[i] - first] == v) continue;
-        values[vr[i] - first] = v;
-        model_changed(inst, vr[i]);
-    }
+    for (size_t i = 0; i < nvr; i++)
+        core_store_integer(inst, type, vr[i], type == FMI2_BOOLEAN ? value[i] != fmi2False : value[i]);
     return fmi2OK;
 }
 
 fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Integer value[]) {
     SET_PROLOGUE(FMI2_INTEGER, "fmi2SetInteger");
-    return set_integers(inst, FMI2_INTEGER, inst->integers, vr, nvr, value, "fmi2SetInteger");
+    return set_integers(inst, FMI2_INTEGER, vr, nvr, value, "fmi2SetInteger");
 }
 
 fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Boolean value[]) {
     SET_PROLOGUE(FMI2_BOOLEAN, "fmi2SetBoolean");
-    return set_integers(inst, FMI2_BOOLEAN, inst->booleans, vr, nvr, value, "fmi2SetBoolean");
+    return set_integers(inst, FMI2_BOOLEAN, vr, nvr, value, "fmi2SetBoolean");
 }
 
 fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2String value[]) {
     SET_PROLOGUE(FMI2_STRING, "fmi2SetString");
-    for (size_t i = 0; i < nvr; i++) {
-        if (check_settable(inst, FMI2_STRING, vr[i], "fmi2SetString") != fmi2OK) return fmi2Error;
-        if (value[i] == NULL) return fmi2_fail(inst, "fmi2SetString: value %zu is NULL", i);
-        if (strlen(value[i]) > inst->info.string_capacity)
-            return fmi2_fail(inst, "fmi2SetString: a value of %zu characters is longer than the %zu this FMU holds",
-                             strlen(value[i]), inst->info.string_capacity);
-        if (model_check_string(inst, vr[i], value[i], "fmi2SetString") != fmi2OK) return fmi2Error;
-    }
-    for (size_t i = 0; i < nvr; i++) {
-        char *slot = fmi2_string(inst, vr[i]);
-        if (strcmp(slot, value[i]) == 0) continue;
-        strcpy(slot, value[i]);
-        model_changed(inst, vr[i]);
-    }
+    for (size_t i = 0; i < nvr; i++)
+        if (core_accept_string(inst, vr[i], value[i], "fmi2SetString") != fmi2OK) return fmi2Error;
+    for (size_t i = 0; i < nvr; i++) core_store_string(inst, vr[i], value[i]);
     return fmi2OK;
 }
 
@@ -388,18 +252,8 @@ fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReferenc
 fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2Real communicationStepSize,
                       fmi2Boolean noSetFMUStatePriorToCurrentPoint) {
     REQUIRE(c, FMI2_STEP_COMPLETE, "fmi2DoStep");
-    REQUIRE_TYPE(fmi2CoSimulation, "fmi2DoStep");
     (void)noSetFMUStatePriorToCurrentPoint;
-    const double h = communicationStepSize, t = inst->time;
-    if (!isfinite(h) || h < 0.0)
-        return fmi2_fail(inst, "fmi2DoStep: communicationStepSize must be finite and >= 0, got %g", h);
-    if (!isfinite(currentCommunicationPoint) || fabs(currentCommunicationPoint - t) > 1e-9 * fmax(1.0, fabs(t)))
-        return fmi2_fail(inst, "fmi2DoStep: currentCommunicationPoint %.17g is not the FMU's time %.17g",
-                         currentCommunicationPoint, t);
-    if (h == 0.0) return fmi2OK;
-    if (model_do_step(inst, currentCommunicationPoint, h) != fmi2OK) return fmi2Error;
-    inst->time = currentCommunicationPoint + h;
-    return fmi2OK;
+    return core_do_step(inst, currentCommunicationPoint, communicationStepSize, "fmi2DoStep");
 }
 
 fmi2Status fmi2CancelStep(fmi2Component c) {

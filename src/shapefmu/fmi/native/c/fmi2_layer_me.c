@@ -1,13 +1,11 @@
-/* Model Exchange functions and directional derivatives of the generic FMI 2.0 layer.
+/* Model Exchange functions, directional derivatives and FMU states of the generic FMI 2.0 layer.
  *
  * The continuous states and their derivatives are Real variables at the value references the
- * model part declares (Fmi2ModelInfo.state_vr, derivative_vr); the layer checks the calls and their
- * arguments and asks the model part to recompute (model_update) or linearise
- * (model_partial_derivative). The models have no event indicators and no time events.
+ * model part declares (Fmi2ModelInfo.state_vr, derivative_vr); the core (layer_core.c) checks the
+ * calls and their arguments and asks the model part to recompute (model_update) or linearise
+ * (model_partial_derivative). The models have no event indicators and no time events. FMU states
+ * are layer_state.c's.
  */
-#include <math.h>
-#include <string.h>
-
 #include "fmi2_layer.h"
 
 fmi2Status fmi2EnterEventMode(fmi2Component c) {
@@ -52,40 +50,17 @@ fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStat
 fmi2Status fmi2SetTime(fmi2Component c, fmi2Real time) {
     REQUIRE(c, FMI2_EVENT_MODE | FMI2_CONTINUOUS_TIME, "fmi2SetTime");
     REQUIRE_TYPE(fmi2ModelExchange, "fmi2SetTime");
-    if (!isfinite(time)) return fmi2_fail(inst, "fmi2SetTime: time must be finite, got %g", time);
-    inst->time = time;
-    return fmi2OK;
+    return core_set_time(inst, time, "fmi2SetTime");
 }
-
-/* The call's state count n is the model's. */
-#define REQUIRE_STATES(n, function)                                                                 \
-    if ((n) != (size_t)inst->info.n_states)                                                         \
-    return fmi2_fail(inst, "%s: nx must be %d, got %zu", function, inst->info.n_states, (size_t)(n))
 
 fmi2Status fmi2SetContinuousStates(fmi2Component c, const fmi2Real x[], size_t n) {
     REQUIRE(c, FMI2_CONTINUOUS_TIME, "fmi2SetContinuousStates");
-    REQUIRE_TYPE(fmi2ModelExchange, "fmi2SetContinuousStates");
-    REQUIRE_ARRAY(x, n, "fmi2SetContinuousStates");
-    REQUIRE_STATES(n, "fmi2SetContinuousStates");
-    for (size_t i = 0; i < n; i++)
-        if (!isfinite(x[i])) {
-            const char *name = "?";
-            model_variable(inst, FMI2_REAL, inst->info.state_vr + i, &name);
-            return fmi2_fail(inst, "fmi2SetContinuousStates: state %s must be finite, got %g", name, x[i]);
-        }
-    memcpy(inst->reals + inst->info.state_vr, x, n * sizeof(double));
-    model_states_changed(inst);
-    return fmi2OK;
+    return core_set_states(inst, x, n, "fmi2SetContinuousStates");
 }
 
 fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real derivatives[], size_t n) {
     REQUIRE(c, AFTER_INSTANTIATION, "fmi2GetDerivatives");
-    REQUIRE_TYPE(fmi2ModelExchange, "fmi2GetDerivatives");
-    REQUIRE_ARRAY(derivatives, n, "fmi2GetDerivatives");
-    REQUIRE_STATES(n, "fmi2GetDerivatives");
-    if (inst->mode != FMI2_ERROR_STATE && model_update(inst, "fmi2GetDerivatives") != fmi2OK) return fmi2Error;
-    if (n) memcpy(derivatives, inst->reals + inst->info.derivative_vr, n * sizeof(double));
-    return fmi2OK;
+    return core_get_derivatives(inst, derivatives, n, "fmi2GetDerivatives");
 }
 
 fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real eventIndicators[], size_t ni) {
@@ -98,20 +73,12 @@ fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real eventIndicators[], s
 
 fmi2Status fmi2GetContinuousStates(fmi2Component c, fmi2Real x[], size_t n) {
     REQUIRE(c, AFTER_INSTANTIATION, "fmi2GetContinuousStates");
-    REQUIRE_TYPE(fmi2ModelExchange, "fmi2GetContinuousStates");
-    REQUIRE_ARRAY(x, n, "fmi2GetContinuousStates");
-    REQUIRE_STATES(n, "fmi2GetContinuousStates");
-    if (n) memcpy(x, inst->reals + inst->info.state_vr, n * sizeof(double));
-    return fmi2OK;
+    return core_get_states(inst, x, n, "fmi2GetContinuousStates");
 }
 
 fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real x_nominal[], size_t n) {
     REQUIRE(c, ANY_MODE, "fmi2GetNominalsOfContinuousStates");
-    REQUIRE_TYPE(fmi2ModelExchange, "fmi2GetNominalsOfContinuousStates");
-    REQUIRE_ARRAY(x_nominal, n, "fmi2GetNominalsOfContinuousStates");
-    REQUIRE_STATES(n, "fmi2GetNominalsOfContinuousStates");
-    if (n) memcpy(x_nominal, inst->info.state_nominal, n * sizeof(double));
-    return fmi2OK;
+    return core_get_nominals(inst, x_nominal, n, "fmi2GetNominalsOfContinuousStates");
 }
 
 fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference vUnknown_ref[], size_t nUnknown,
@@ -122,16 +89,38 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
     REQUIRE_ARRAY(dvUnknown, nUnknown, "fmi2GetDirectionalDerivative");
     REQUIRE_ARRAY(vKnown_ref, nKnown, "fmi2GetDirectionalDerivative");
     REQUIRE_ARRAY(dvKnown, nKnown, "fmi2GetDirectionalDerivative");
-    for (size_t i = 0; i < nUnknown; i++) {
-        double sum = 0.0;
-        for (size_t j = 0; j < nKnown; j++) {
-            double entry;
-            if (model_partial_derivative(inst, vUnknown_ref[i], vKnown_ref[j], &entry, "fmi2GetDirectionalDerivative")
-                != fmi2OK)
-                return fmi2Error;
-            sum += entry * dvKnown[j];
-        }
-        dvUnknown[i] = sum;
-    }
-    return fmi2OK;
+    return core_directional_derivative(inst, vUnknown_ref, nUnknown, vKnown_ref, nKnown, dvKnown, dvUnknown,
+                                       "fmi2GetDirectionalDerivative");
+}
+
+/* ---------------------------------------------------------------- FMU states */
+
+fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
+    REQUIRE(c, ANY_MODE & ~FMI2_ERROR_STATE, "fmi2GetFMUstate");
+    return core_get_state(inst, FMUstate, "fmi2GetFMUstate");
+}
+
+fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate) {
+    REQUIRE(c, ANY_MODE, "fmi2SetFMUstate");
+    return core_set_state(inst, FMUstate, "fmi2SetFMUstate");
+}
+
+fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
+    REQUIRE(c, ANY_MODE, "fmi2FreeFMUstate");
+    return core_free_state(inst, FMUstate, "fmi2FreeFMUstate");
+}
+
+fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, size_t *size) {
+    REQUIRE(c, ANY_MODE, "fmi2SerializedFMUstateSize");
+    return core_serialized_size(inst, FMUstate, size, "fmi2SerializedFMUstateSize");
+}
+
+fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byte serializedState[], size_t size) {
+    REQUIRE(c, ANY_MODE, "fmi2SerializeFMUstate");
+    return core_serialize(inst, FMUstate, (unsigned char *)serializedState, size, "fmi2SerializeFMUstate");
+}
+
+fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedState[], size_t size, fmi2FMUstate *FMUstate) {
+    REQUIRE(c, ANY_MODE, "fmi2DeSerializeFMUstate");
+    return core_deserialize(inst, (const unsigned char *)serializedState, size, FMUstate, "fmi2DeSerializeFMUstate");
 }

@@ -1,10 +1,13 @@
-/* The contract between the generic FMI 2.0 layer (fmi2_layer*.c, written once) and a model part
- * (the plant's plant_fmi2.c, the sampled filters' sampled_fmi2.c, or any small model.c).
+/* The contract between the generic FMI layers (FMI 2.0: fmi2_layer*.c, FMI 3.0: fmi3_layer*.c, both
+ * over the version-neutral layer_core.c and layer_state.c) and a model part (the plant's plant_fmi2.c,
+ * the sampled filters' sampled_fmi2.c, the twins' *_fmi2.c; the names keep the FMI 2.0 spelling the
+ * contract was first written in).
  *
- * As in the FMI Reference FMUs, the layer owns everything FMI: instances and the host's memory
- * callbacks, the state machine (FMI 2.0.x, sections 3.2.3 and 4.2.4), logging, get/set dispatch
- * with the causality and variability rules, FMU state get/set/serialise, argument checks and the
- * error state. A model part describes its variables and does its numerics through the hooks below.
+ * As in the FMI Reference FMUs, a layer owns everything FMI: instances and the host's memory
+ * callbacks, the state machine (FMI 2.0.x sections 3.2.3 and 4.2.4; FMI 3.0 section 2.3), logging,
+ * get/set dispatch with the causality and variability rules, FMU state get/set/serialise, argument
+ * checks and the error state. A model part describes its variables and does its numerics through the
+ * hooks below, and is compiled the same for either FMI version: this header needs no FMI header.
  *
  * Values live in one array per type, owned by the layer and read and written by the model:
  * value references are unique across types, in this order: Real 0 .. n_real-1, then Integer,
@@ -15,7 +18,7 @@
 
 #include <stddef.h>
 
-#include "fmi2Functions.h"
+#include "model_status.h"
 
 /* Longest String value a variable holds by default (its valid values are names, e.g. a design
  * kind); a model part holding longer text (a signal table) declares its own string_capacity. */
@@ -53,20 +56,25 @@ typedef struct {
     size_t string_capacity;      /* longest String value; 0: FMI2_STRING_CAPACITY */
 } Fmi2ModelInfo;
 
-typedef struct {
+typedef struct Fmi2Instance {
     unsigned long long live_tag;  /* first: fmu_liveness.h reads it through the bare instance pointer */
     Fmi2ModelInfo info;
-    fmi2Type type;
+    int model_exchange;          /* instantiated for Model Exchange (else Co-Simulation) */
     Fmi2Mode mode;
     char *name;
-    fmi2CallbackFunctions callbacks;
-    fmi2Boolean logging_on;
+    int logging_on;
     double time;                 /* the FMU's time: start time, then the end of the last step */
     double start_time;           /* fmi2SetupExperiment's startTime (0 if not called) */
     double *reals;               /* every variable's value, indexed by value reference */
     int *integers, *booleans;
     char *strings;               /* n_string slots of info.string_capacity + 1 characters */
     void *model;                 /* the model part's own data */
+    /* the layer's: the host's allocator (FMI 2.0) or the C library's (FMI 3.0), the logger that
+     * reaches the host, and the layer's own data (its host callbacks, FMI 3.0's variable table) */
+    void *(*allocate)(size_t count, size_t size);
+    void (*release)(void *pointer);
+    void (*emit)(const struct Fmi2Instance *inst, int error, const char *category, const char *message);
+    void *layer;
 } Fmi2Instance;
 
 /* ---- services of the layer to the model part */

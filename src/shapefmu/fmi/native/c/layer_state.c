@@ -1,4 +1,5 @@
-/* FMU states of the generic FMI 2.0 layer: get, set, free, serialise and deserialise.
+/* FMU states of the generic FMI layers (layer_core.h; FMI 2.0 and FMI 3.0 alike): get, set, free,
+ * serialise and deserialise.
  *
  * A state is everything needed to resume exactly: the mode, the time, every variable's value and
  * the model part's own data (model_save_state: a filter's delay line, its sample clock). A state
@@ -11,7 +12,7 @@
 #include <math.h>
 #include <string.h>
 
-#include "fmi2_layer.h"
+#include "layer_core.h"
 
 #define SERIAL_MAGIC 0x73686170464d5532ULL   /* "shapFMU2" */
 #define SNAPSHOT_MAGIC 0x7368617053746174ULL /* "shapStat" */
@@ -39,24 +40,31 @@ static unsigned long long identity(const Fmi2Instance *inst) {
     return hash;
 }
 
+/* Whether state is a snapshot this FMU made (a state of another FMU, or a pointer that is no state,
+ * is refused rather than read). */
+static int ours(const Fmi2Instance *inst, const void *state) {
+    const Snapshot *s = state;
+    return s->magic == SNAPSHOT_MAGIC && s->identity == identity(inst);
+}
+
 /* Whether every value of s passes the model's checks of a set call (see the file comment). */
-static fmi2Status check_values(Fmi2Instance *inst, const Snapshot *s) {
+static fmi2Status check_values(Fmi2Instance *inst, const Snapshot *s, const char *function) {
     const Fmi2ModelInfo *info = &inst->info;
     const char *name;
     if (!isfinite(s->time) || !isfinite(s->start_time))
-        return fmi2_fail(inst, "fmi2SetFMUstate: the state's time is not finite");
+        return fmi2_fail(inst, "%s: the state's time is not finite", function);
     for (size_t vr = 0; vr < info->n_real; vr++)
         if (model_variable(inst, FMI2_REAL, vr, &name) != FMI2_NO_VARIABLE
-            && model_check_real(inst, vr, s->reals[vr], "fmi2SetFMUstate") != fmi2OK)
+            && model_check_real(inst, vr, s->reals[vr], function) != fmi2OK)
             return fmi2Error;
     /* Value references run on across the types (fmi2_layer.c, type_range): Integer ones after the Reals. */
     for (size_t i = 0, vr = info->n_real; i < info->n_integer; i++, vr++)
         if (model_variable(inst, FMI2_INTEGER, vr, &name) != FMI2_NO_VARIABLE
-            && model_check_integer(inst, vr, s->integers[i], "fmi2SetFMUstate") != fmi2OK)
+            && model_check_integer(inst, vr, s->integers[i], function) != fmi2OK)
             return fmi2Error;
     for (size_t i = 0, vr = info->n_real + info->n_integer + info->n_boolean; i < info->n_string; i++, vr++)
         if (model_variable(inst, FMI2_STRING, vr, &name) != FMI2_NO_VARIABLE
-            && model_check_string(inst, vr, s->strings + i * (inst->info.string_capacity + 1), "fmi2SetFMUstate") != fmi2OK)
+            && model_check_string(inst, vr, s->strings + i * (inst->info.string_capacity + 1), function) != fmi2OK)
             return fmi2Error;
     return fmi2OK;
 }
@@ -64,7 +72,7 @@ static fmi2Status check_values(Fmi2Instance *inst, const Snapshot *s) {
 static void free_snapshot(Fmi2Instance *inst, Snapshot *s) {
     void *buffers[] = {s->reals, s->integers, s->booleans, s->strings, s->model};
     for (size_t i = 0; i < sizeof buffers / sizeof buffers[0]; i++) fmi2_release(inst, buffers[i]);
-    inst->callbacks.freeMemory(s);
+    inst->release(s);
 }
 
 /* A snapshot with room for the value arrays and model_size bytes of model data. */
@@ -90,7 +98,7 @@ static Snapshot *new_snapshot(Fmi2Instance *inst, size_t model_size) {
 }
 
 /* A snapshot to write into: *FMUstate if it has the right size, else a new one (the old freed). */
-static Snapshot *writable(Fmi2Instance *inst, fmi2FMUstate *FMUstate, size_t model_size) {
+static Snapshot *writable(Fmi2Instance *inst, void **FMUstate, size_t model_size) {
     Snapshot *s = *FMUstate;
     if (s != NULL && s->model_size == model_size) return s;
     if (s != NULL) free_snapshot(inst, s);
@@ -108,11 +116,12 @@ static void copy_values(const Fmi2Instance *inst, double *reals, int *integers, 
     if (info->n_string) memcpy(strings, from_strings, string_bytes(inst));
 }
 
-fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
-    REQUIRE(c, ANY_MODE & ~FMI2_ERROR_STATE, "fmi2GetFMUstate");
-    REQUIRE_ARRAY(FMUstate, 1, "fmi2GetFMUstate");
+fmi2Status core_get_state(Fmi2Instance *inst, void **FMUstate, const char *function) {
+    if (FMUstate == NULL) return fmi2_fail(inst, "%s: FMUstate is NULL", function);
+    if (*FMUstate != NULL && !ours(inst, *FMUstate))
+        return fmi2_fail(inst, "%s: *FMUstate is neither NULL nor a state of this FMU", function);
     Snapshot *s = writable(inst, FMUstate, model_state_size(inst));
-    if (s == NULL) return fmi2_fail(inst, "fmi2GetFMUstate: out of memory");
+    if (s == NULL) return fmi2_fail(inst, "%s: out of memory", function);
     s->mode = inst->mode;
     s->time = inst->time;
     s->start_time = inst->start_time;
@@ -123,29 +132,27 @@ fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
     return fmi2OK;
 }
 
-fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate) {
-    REQUIRE(c, ANY_MODE, "fmi2SetFMUstate");
-    if (FMUstate == NULL) return fmi2_fail(inst, "fmi2SetFMUstate: FMUstate is NULL");
+fmi2Status core_set_state(Fmi2Instance *inst, const void *FMUstate, const char *function) {
+    if (FMUstate == NULL) return fmi2_fail(inst, "%s: FMUstate is NULL", function);
     const Snapshot *s = FMUstate;
-    if (s->magic != SNAPSHOT_MAGIC || s->identity != identity(inst))
-        return fmi2_fail(inst, "fmi2SetFMUstate: the state is not one of this FMU (another FMU's, or no state at all)");
-    if (check_values(inst, s) != fmi2OK) return fmi2Error;
+    if (!ours(inst, s))
+        return fmi2_fail(inst, "%s: the state is not one of this FMU (another FMU's, or no state at all)", function);
+    if (check_values(inst, s, function) != fmi2OK) return fmi2Error;
     copy_values(inst, inst->reals, inst->integers, inst->booleans, inst->strings, s->reals, s->integers, s->booleans,
                 s->strings);
     inst->time = s->time;
     inst->start_time = s->start_time;
     inst->mode = s->mode;
     if (model_restore_state(inst, s->model, s->model_size) != 0)
-        return fmi2_fail(inst, "fmi2SetFMUstate: the state does not fit this instance's model data");
+        return fmi2_fail(inst, "%s: the state does not fit this instance's model data", function);
     return fmi2OK;
 }
 
-fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
-    REQUIRE(c, ANY_MODE, "fmi2FreeFMUstate");
+fmi2Status core_free_state(Fmi2Instance *inst, void **FMUstate, const char *function) {
     if (FMUstate == NULL || *FMUstate == NULL) return fmi2OK;
     const Snapshot *s = *FMUstate;
-    if (s->magic != SNAPSHOT_MAGIC || s->identity != identity(inst))
-        return fmi2_fail(inst, "fmi2FreeFMUstate: the state is not one of this FMU (another FMU's, or no state at all)");
+    if (!ours(inst, s))
+        return fmi2_fail(inst, "%s: the state is not one of this FMU (another FMU's, or no state at all)", function);
     free_snapshot(inst, *FMUstate);
     *FMUstate = NULL;
     return fmi2OK;
@@ -161,9 +168,9 @@ static size_t serial_size(const Fmi2Instance *inst, size_t model_size) {
            + (info->n_integer + info->n_boolean) * sizeof(int) + string_bytes(inst) + model_size;
 }
 
-fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, size_t *size) {
-    REQUIRE(c, ANY_MODE, "fmi2SerializedFMUstateSize");
-    if (FMUstate == NULL || size == NULL) return fmi2_fail(inst, "fmi2SerializedFMUstateSize: NULL FMUstate or size");
+fmi2Status core_serialized_size(Fmi2Instance *inst, const void *FMUstate, size_t *size, const char *function) {
+    if (FMUstate == NULL || size == NULL) return fmi2_fail(inst, "%s: NULL FMUstate or size", function);
+    if (!ours(inst, FMUstate)) return fmi2_fail(inst, "%s: the state is not one of this FMU", function);
     *size = serial_size(inst, ((const Snapshot *)FMUstate)->model_size);
     return fmi2OK;
 }
@@ -178,13 +185,14 @@ static const unsigned char *take(void *to, const unsigned char *from, size_t byt
     return from + bytes;
 }
 
-fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byte serializedState[], size_t size) {
-    REQUIRE(c, ANY_MODE, "fmi2SerializeFMUstate");
+fmi2Status core_serialize(Fmi2Instance *inst, const void *FMUstate, unsigned char serializedState[], size_t size,
+                          const char *function) {
     if (FMUstate == NULL || serializedState == NULL)
-        return fmi2_fail(inst, "fmi2SerializeFMUstate: NULL FMUstate or buffer");
+        return fmi2_fail(inst, "%s: NULL FMUstate or buffer", function);
     const Snapshot *s = FMUstate;
+    if (!ours(inst, s)) return fmi2_fail(inst, "%s: the state is not one of this FMU", function);
     if (size != serial_size(inst, s->model_size))
-        return fmi2_fail(inst, "fmi2SerializeFMUstate: buffer holds %zu bytes, the state needs %zu", size,
+        return fmi2_fail(inst, "%s: buffer holds %zu bytes, the state needs %zu", function, size,
                          serial_size(inst, s->model_size));
     const Fmi2ModelInfo *info = &inst->info;
     const unsigned long long header[HEADER_WORDS] = {SERIAL_MAGIC, identity(inst), info->n_real, info->n_integer,
@@ -201,26 +209,28 @@ fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byt
     return fmi2OK;
 }
 
-fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedState[], size_t size, fmi2FMUstate *FMUstate) {
-    REQUIRE(c, ANY_MODE, "fmi2DeSerializeFMUstate");
+fmi2Status core_deserialize(Fmi2Instance *inst, const unsigned char serializedState[], size_t size, void **FMUstate,
+                            const char *function) {
     if (serializedState == NULL || FMUstate == NULL)
-        return fmi2_fail(inst, "fmi2DeSerializeFMUstate: NULL buffer or FMUstate");
+        return fmi2_fail(inst, "%s: NULL buffer or FMUstate", function);
+    if (*FMUstate != NULL && !ours(inst, *FMUstate))
+        return fmi2_fail(inst, "%s: *FMUstate is neither NULL nor a state of this FMU", function);
     unsigned long long header[HEADER_WORDS];
     if (size < sizeof header)
-        return fmi2_fail(inst, "fmi2DeSerializeFMUstate: got %zu bytes, fewer than a state's header", size);
+        return fmi2_fail(inst, "%s: got %zu bytes, fewer than a state's header", function, size);
     const unsigned char *p = take(header, (const unsigned char *)serializedState, sizeof header);
     const Fmi2ModelInfo *info = &inst->info;
     const int mode_ok = header[6] != 0 && (header[6] & ~(unsigned long long)ANY_MODE) == 0;
     if (header[0] != SERIAL_MAGIC || header[1] != identity(inst) || header[2] != info->n_real
         || header[3] != info->n_integer || header[4] != info->n_boolean || header[5] != info->n_string || !mode_ok
         || header[7] > size)
-        return fmi2_fail(inst, "fmi2DeSerializeFMUstate: the bytes are not a serialised state of this FMU");
+        return fmi2_fail(inst, "%s: the bytes are not a serialised state of this FMU", function);
     const size_t model_size = (size_t)header[7];
     if (size != serial_size(inst, model_size))
-        return fmi2_fail(inst, "fmi2DeSerializeFMUstate: got %zu bytes, a state of this FMU has %zu", size,
+        return fmi2_fail(inst, "%s: got %zu bytes, a state of this FMU has %zu", function, size,
                          serial_size(inst, model_size));
     Snapshot *s = writable(inst, FMUstate, model_size);
-    if (s == NULL) return fmi2_fail(inst, "fmi2DeSerializeFMUstate: out of memory");
+    if (s == NULL) return fmi2_fail(inst, "%s: out of memory", function);
     double times[2];
     s->mode = (Fmi2Mode)header[6];
     p = take(times, p, sizeof times);

@@ -1,0 +1,39 @@
+/* Shared by the two files of the generic FMI 3.0 layer only (fmi3_layer.c, fmi3_layer_me.c): the
+ * layer's data of an instance, its value references, and the entry guards. Model parts include
+ * fmi2_model.h, not this.
+ *
+ * Value references. FMI 3.0 numbers variables, not values, and has arrays; the contract
+ * (fmi2_model.h) numbers values ("slots"). The layer lists the contract's variables by slot, Real,
+ * Integer, Boolean, String, and makes one FMI 3.0 variable of each, except that the elements
+ * base[1], base[2], ... of one type become the array variable base (in the order they come, even when
+ * another array's elements come between them, as a Shaper's f[i] and zeta[i] do). Value reference 0 is
+ * time, the independent variable; the k-th variable of that list has value reference k. A model
+ * part's own "time" slot (the plants keep time in slot 0) is time, not another variable.
+ * shapefmu.fmi.native.description3 numbers the modelDescription.xml the same way.
+ */
+#ifndef FMI3_LAYER_H
+#define FMI3_LAYER_H
+
+#include "fmi3Functions.h"
+#include "layer_core.h"
+
+typedef struct {
+    fmi3InstanceEnvironment environment;
+    fmi3LogMessageCallback log;
+    size_t n_variables;   /* value references 1 .. n_variables */
+    size_t *first;        /* n_variables + 1 offsets into slots: variable k's elements are */
+    size_t *slots;        /* slots[first[k - 1] .. first[k] - 1] */
+    Fmi2Type *types;      /* of each variable */
+} Fmi3Layer;
+
+#define ENTER(instance, allowed, function) GUARD(instance, allowed, function, fmi3Error)
+#define ENTER_ARRAY(pointer, count, function) GUARD_ARRAY(pointer, count, function, fmi3Error)
+#define FAIL(...) ((fmi3Status)fmi2_fail(inst, __VA_ARGS__))
+
+static inline Fmi3Layer *layer_of(const Fmi2Instance *inst) { return (Fmi3Layer *)inst->layer; }
+
+/* The slot of scalar variable vr of the given type; logs and returns 0 if vr is none (or time, or
+ * an array). */
+int fmi3_scalar_slot(Fmi2Instance *inst, fmi3ValueReference vr, Fmi2Type type, size_t *slot, const char *function);
+
+#endif
