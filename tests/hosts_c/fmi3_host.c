@@ -1,0 +1,210 @@
+/*
+ * A small FMI 3.0 Co-Simulation host in C that behaves like the hosts we did not write (the FMI 3.0
+ * twin of fmi2_host.c, with its time keeping, inputs and CSV, so the two hosts' rows of an FMI 2.0
+ * FMU and of its FMI 3.0 twin compare line by line). Compiled and run by tests/test_native_fmi3.py.
+ *
+ *   fmi3_host [options] --fmu DIR IDENTIFIER TOKEN INPUT_VRS OUTPUT_VRS
+ *
+ * DIR is an extracted FMU; INPUT_VRS / OUTPUT_VRS are comma-separated Float64 value references of
+ * scalars ("-": none). Options:
+ *   --stop T --steps N   keep time as t += h with h = T / N and trim the last step to land on T
+ *                        (if t + h > T: h = T - t), as fmuCheck and OMSimulator do
+ *   --random SEED LO HI N   N steps of random size as fmi2_host's --random SEED LO HI N 0 takes them:
+ *                        in turn log-uniform, uniform and log-uniform in [LO, HI] (splitmix64)
+ *   --amplitude A --period P   the inputs u_j(t) = A (sin(2 pi t / P + j) + q(t)), q the square wave
+ *                        1 on the first half of each period (defaults A = 1, P = 0.05), as fmi2_host
+ *   --set VR=V1[,V2...]  in initialization mode: set Float64 variable VR (an array takes its
+ *                        elements in order; repeatable)
+ *   --teardown MODE      normal: fmi3Terminate, fmi3FreeInstance, dlclose at the end of main;
+ *                        atexit: fmi3Terminate and fmi3FreeInstance from an exit handler registered
+ *                        before the FMU is loaded (so it runs after every handler the FMU registers)
+ *   --csv PATH           one row per communication point, after the inputs are set:
+ *                        0, 0, 0, t, inputs..., outputs... (%.17g), as fmi2_host writes them
+ * Any call that returns anything but fmi3OK makes the process exit with status 2 (3 from the exit
+ * handler).
+ */
+#include <dlfcn.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "fmi3FunctionTypes.h"
+
+#define MAX_VRS 64
+#define MAX_SETS 32
+#define MAX_ELEMENTS 4096
+
+static void* lib;
+static fmi3Instance instance;
+static fmi3TerminateTYPE* terminate_;
+static fmi3FreeInstanceTYPE* free_instance;
+
+static void logger(fmi3InstanceEnvironment env, fmi3Status status, fmi3String category, fmi3String message)
+{
+    (void)env;
+    fprintf(stderr, "[%d %s] %s\n", (int)status, category != NULL ? category : "", message != NULL ? message : "");
+}
+
+static void check(fmi3Status status, const char* call, double t, int in_exit_handler)
+{
+    if (status == fmi3OK) return;
+    fprintf(stderr, "FAIL %s returned status %d at t = %.17g\n", call, (int)status, t);
+    fflush(stderr);
+    if (in_exit_handler) _exit(3); /* exit() from an exit handler is undefined */
+    exit(2);
+}
+
+static void* symbol(const char* name)
+{
+    void* p = dlsym(lib, name);
+    if (p == NULL) {
+        fprintf(stderr, "FAIL the FMU lacks %s\n", name);
+        exit(2);
+    }
+    return p;
+}
+
+static void teardown_at_exit(void)
+{
+    check(terminate_(instance), "fmi3Terminate", NAN, 1);
+    free_instance(instance);
+    fprintf(stderr, "exit handler: atexit done\n");
+}
+
+static size_t parse_list(const char* text, double* values, size_t capacity)
+{
+    size_t n = 0;
+    char* end;
+    if (strcmp(text, "-") == 0) return 0;
+    while (n < capacity) {
+        values[n++] = strtod(text, &end);
+        if (*end != ',') break;
+        text = end + 1;
+    }
+    return n;
+}
+
+static double input(double t, size_t j, double amplitude, double period)
+{
+    double phase = fmod(t, period);
+    return amplitude * (sin(2.0 * M_PI * t / period + (double)j) + (phase < 0.5 * period ? 1.0 : 0.0));
+}
+
+static uint64_t rng_state;
+static double uniform01(void)
+{
+    uint64_t z = (rng_state += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    z ^= z >> 31;
+    return (double)(z >> 11) * (1.0 / 9007199254740992.0);
+}
+
+int main(int argc, char** argv)
+{
+    const char *dir = NULL, *identifier = NULL, *token = NULL, *teardown = "normal", *csv_path = NULL;
+    double stop = NAN, amplitude = 1.0, period = 0.05, lo = 0.0, hi = 0.0, buffer[MAX_VRS];
+    long steps = 0, random_steps = 0;
+    fmi3ValueReference in[MAX_VRS], out[MAX_VRS], set_vr[MAX_SETS];
+    static double set_values[MAX_SETS][MAX_ELEMENTS];
+    size_t n_in = 0, n_out = 0, n_set = 0, set_count[MAX_SETS], k;
+    for (int a = 1; a < argc; a++) {
+        const char* o = argv[a];
+        int more = argc - 1 - a;
+        if (more >= 1 && strcmp(o, "--stop") == 0) stop = atof(argv[++a]);
+        else if (more >= 1 && strcmp(o, "--steps") == 0) steps = atol(argv[++a]);
+        else if (more >= 4 && strcmp(o, "--random") == 0) {
+            rng_state = strtoull(argv[++a], NULL, 10);
+            lo = atof(argv[++a]), hi = atof(argv[++a]), random_steps = atol(argv[++a]);
+        }
+        else if (more >= 1 && strcmp(o, "--amplitude") == 0) amplitude = atof(argv[++a]);
+        else if (more >= 1 && strcmp(o, "--period") == 0) period = atof(argv[++a]);
+        else if (more >= 1 && strcmp(o, "--teardown") == 0) teardown = argv[++a];
+        else if (more >= 1 && strcmp(o, "--csv") == 0) csv_path = argv[++a];
+        else if (more >= 1 && strcmp(o, "--set") == 0 && n_set < MAX_SETS) {
+            char* equals = strchr(argv[++a], '=');
+            if (equals == NULL) return 64;
+            set_vr[n_set] = (fmi3ValueReference)strtoul(argv[a], NULL, 10);
+            set_count[n_set] = parse_list(equals + 1, set_values[n_set], MAX_ELEMENTS);
+            n_set++;
+        }
+        else if (more >= 5 && strcmp(o, "--fmu") == 0) {
+            dir = argv[++a], identifier = argv[++a], token = argv[++a];
+            n_in = parse_list(argv[++a], buffer, MAX_VRS);
+            for (k = 0; k < n_in; k++) in[k] = (fmi3ValueReference)buffer[k];
+            n_out = parse_list(argv[++a], buffer, MAX_VRS);
+            for (k = 0; k < n_out; k++) out[k] = (fmi3ValueReference)buffer[k];
+        }
+        else {
+            fprintf(stderr, "usage: see the comment at the top of fmi3_host.c (at %s)\n", o);
+            return 64;
+        }
+    }
+    if (dir == NULL || (random_steps == 0 && (isnan(stop) || steps <= 0))) {
+        fprintf(stderr, "usage: see the comment at the top of fmi3_host.c\n");
+        return 64;
+    }
+    /* Registered before the FMU is loaded: it runs after every exit handler the FMU registers. */
+    if (strcmp(teardown, "atexit") == 0) atexit(teardown_at_exit);
+    FILE* csv = csv_path != NULL ? fopen(csv_path, "w") : NULL;
+    char path[4096];
+    snprintf(path, sizeof(path), "%s/binaries/x86_64-linux/%s.so", dir, identifier);
+    if ((lib = dlopen(path, RTLD_NOW | RTLD_LOCAL)) == NULL) {
+        fprintf(stderr, "FAIL dlopen %s: %s\n", path, dlerror());
+        return 2;
+    }
+    fmi3InstantiateCoSimulationTYPE* instantiate = (fmi3InstantiateCoSimulationTYPE*)symbol("fmi3InstantiateCoSimulation");
+    fmi3EnterInitializationModeTYPE* enter = (fmi3EnterInitializationModeTYPE*)symbol("fmi3EnterInitializationMode");
+    fmi3ExitInitializationModeTYPE* exit_init = (fmi3ExitInitializationModeTYPE*)symbol("fmi3ExitInitializationMode");
+    fmi3SetFloat64TYPE* set_float64 = (fmi3SetFloat64TYPE*)symbol("fmi3SetFloat64");
+    fmi3GetFloat64TYPE* get_float64 = (fmi3GetFloat64TYPE*)symbol("fmi3GetFloat64");
+    fmi3DoStepTYPE* do_step = (fmi3DoStepTYPE*)symbol("fmi3DoStep");
+    terminate_ = (fmi3TerminateTYPE*)symbol("fmi3Terminate");
+    free_instance = (fmi3FreeInstanceTYPE*)symbol("fmi3FreeInstance");
+    snprintf(path, sizeof(path), "%s/resources/", dir);
+    instance = instantiate("host", token, path, fmi3False, fmi3False, fmi3False, fmi3False, NULL, 0, NULL, logger, NULL);
+    if (instance == NULL) {
+        fprintf(stderr, "FAIL fmi3InstantiateCoSimulation returned NULL\n");
+        return 2;
+    }
+    check(enter(instance, fmi3False, 0.0, 0.0, fmi3False, 0.0), "fmi3EnterInitializationMode", 0.0, 0);
+    for (k = 0; k < n_set; k++) check(set_float64(instance, &set_vr[k], 1, set_values[k], set_count[k]), "fmi3SetFloat64", 0.0, 0);
+    check(exit_init(instance), "fmi3ExitInitializationMode", 0.0, 0);
+    double t = 0.0, h = steps > 0 ? stop / (double)steps : 0.0, u[MAX_VRS], y[MAX_VRS];
+    for (long n = 0;; n++) {
+        for (k = 0; k < n_in; k++) u[k] = input(t, k, amplitude, period);
+        if (n_in) check(set_float64(instance, in, n_in, u, n_in), "fmi3SetFloat64", t, 0);
+        if (n_out) check(get_float64(instance, out, n_out, y, n_out), "fmi3GetFloat64", t, 0);
+        if (csv != NULL) {
+            fprintf(csv, "0,0,0,%.17g", t);
+            for (k = 0; k < n_in; k++) fprintf(csv, ",%.17g", u[k]);
+            for (k = 0; k < n_out; k++) fprintf(csv, ",%.17g", y[k]);
+            fputc('\n', csv);
+        }
+        double step = h;
+        if (random_steps > 0) {
+            if (n == random_steps) break;
+            const double r = uniform01();
+            step = n % 3 == 1 ? lo + (hi - lo) * r : lo * pow(hi / lo, r);
+        } else {
+            if (!(t < stop)) break;
+            if (t + step > stop) step = stop - t; /* the trimmed last step of fmuCheck and OMSimulator */
+        }
+        fmi3Boolean event, terminate, early;
+        fmi3Float64 last;
+        check(do_step(instance, t, step, fmi3True, &event, &terminate, &early, &last), "fmi3DoStep", t, 0);
+        t += step;
+    }
+    if (csv != NULL) fclose(csv);
+    if (strcmp(teardown, "normal") == 0) {
+        check(terminate_(instance), "fmi3Terminate", t, 0);
+        free_instance(instance);
+        if (dlclose(lib) != 0) return 2;
+    }
+    printf("done\n");
+    fflush(stdout);
+    return 0;
+}

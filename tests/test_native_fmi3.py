@@ -1,0 +1,204 @@
+"""Every native FMU as FMI 3.0 (the generic FMI 3.0 layer, c/fmi3_layer*.c) against its FMI 2.0 twin.
+
+Each kind of native FMU -- the plants, the Shaper (a closed-form and a build-time design), the
+ShapeFilter, the EKF tuner, the STOS controller, the reference player and the profile generator --
+is built from the same start values as FMI 2.0 and as FMI 3.0. The second opinions:
+
+- fmpy's own FMI 3.0 simulation of the FMI 3.0 FMU equals fmpy's FMI 2.0 simulation of the twin,
+  with an input signal and a design parameter set as an array (FMI 3.0) or as its elements (2.0);
+- our C hosts, which keep time as t += h, trim the last step onto stop = 500 h and tear down from an
+  exit handler registered before the FMU was loaded: hosts_c/fmi3_host.c on the FMI 3.0 FMU prints
+  the rows hosts_c/fmi2_host.c prints on the twin, for steps of stop/500 and of random sizes;
+- the same FMI 3.0 host under valgrind memcheck;
+- fmpy.validation.validate_fmu on every FMI 3.0 archive, and the array parameters it declares.
+"""
+
+from __future__ import annotations
+
+import subprocess
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import numpy as np
+import pytest
+from c_host import fmu_arguments, host_rows, run_host
+from fixtures_native import FILTERS, ONE_MODE, TWO_MODES, shaper_starts
+
+HEADERS = Path(__file__).parent.parent / "src" / "shapefmu" / "fmi" / "native" / "c"
+HOST3 = Path(__file__).parent / "hosts_c" / "fmi3_host.c"
+STOP = 0.5
+
+# name -> (twin model name, start values, stop time): every kind of native FMU.
+CASES = {
+    "shaper zvd": ("Shaper", shaper_starts("zvd", TWO_MODES), STOP),
+    "shaper ei2": ("Shaper", shaper_starts("ei2", ONE_MODE), STOP),
+    "filter hanning2": ("ShapeFilter", FILTERS["hanning2"], STOP),
+    "filter TP:BC": ("ShapeFilter", FILTERS["TP:BC"], STOP),
+    "ekf tuner": ("EKFTuner", {}, STOP),
+    "stos controller": ("STOSController", {}, STOP),
+    "reference player": ("ReferencePlayer", {}, STOP),
+    "profile generator": ("ProfileGenerator", {}, STOP),
+}
+# Set in initialisation on both: FMI 2.0 by element, FMI 3.0 as the array (its other elements as built).
+ARRAY_SETS = {"shaper zvd": ("f", 1, 14.5), "filter hanning2": ("tap", 3, 0.125), "plant": ("f", 1, 2100.0)}
+
+
+def _build(name, version, folder):
+    from shapefmu.fmi.native import build_plant_fmu
+    from shapefmu.fmi.native.twins import build_native
+
+    path = folder / f"{name.replace(' ', '_').replace(':', '_')}_{version[0]}.fmu"
+    if name == "plant":
+        return build_plant_fmu("models/disk_drive.toml", path, fmi_version=version)
+    model, starts, _ = CASES[name]
+    return build_native(model, path, fmi_version=version, **starts)
+
+
+@pytest.fixture(scope="module")
+def twins(tmp_path_factory):
+    """{name: (FMI 2.0 FMU, FMI 3.0 FMU)} of every case and the disk-drive plant."""
+    folder = tmp_path_factory.mktemp("fmi3_twins")
+    names = [*CASES, "plant"]
+    with ThreadPoolExecutor(2) as pool:
+        jobs = {(n, v): pool.submit(_build, n, v, folder) for n in names for v in ("2.0", "3.0")}
+        return {n: (jobs[(n, "2.0")].result(), jobs[(n, "3.0")].result()) for n in names}
+
+
+@pytest.fixture(scope="module")
+def fmi3_host(tmp_path_factory) -> Path:
+    program = tmp_path_factory.mktemp("fmi3_host") / "fmi3_host"
+    subprocess.run(["gcc", "-O2", "-Wall", "-Wextra", "-Werror", "-I", str(HEADERS), "-o", str(program), str(HOST3),
+                    "-ldl", "-lm"], check=True, capture_output=True, text=True)
+    return program
+
+
+def _variables(fmu):
+    from fmpy import read_model_description
+
+    return {v.name: v for v in read_model_description(str(fmu)).modelVariables}
+
+
+def _array_set(name, fmu2):
+    """({FMI 2.0 element: value}, {FMI 3.0 array: values}) of the case's array parameter set, if any."""
+    if name not in ARRAY_SETS:
+        return {}, {}
+    base, index, value = ARRAY_SETS[name]
+    elements = sorted((v for v in _variables(fmu2).values() if v.name.startswith(f"{base}[")),
+                      key=lambda v: int(v.name[len(base) + 1:-1]))
+    values = [float(v.start) for v in elements]
+    values[index - 1] = value
+    return {f"{base}[{index}]": value}, {base: values}
+
+
+@pytest.mark.parametrize("name", [*CASES, "plant"])
+def test_the_fmi3_fmu_passes_fmpy_validation_with_its_arrays(twins, name):
+    from fmpy.validation import validate_fmu
+
+    fmu2, fmu3 = twins[name]
+    assert validate_fmu(str(fmu3)) == []
+    two, three = _variables(fmu2), _variables(fmu3)
+    assert three["time"].causality == "independent"
+    for variable in three.values():
+        if variable.dimensions:  # an array parameter: the FMI 2.0 twin's elements base[1] .. base[n]
+            (dimension,) = variable.dimensions
+            count = int(dimension.start)
+            assert variable.causality == "parameter"
+            assert [f"{variable.name}[{i}]" for i in range(1, count + 1)] == [
+                n for n in two if n.startswith(f"{variable.name}[")]
+            starts = [float(s) for s in str(variable.start).split()]
+            assert starts == [float(two[f"{variable.name}[{i}]"].start) for i in range(1, count + 1)]
+        elif variable.name != "time":
+            assert variable.name in two and variable.causality == two[variable.name].causality
+    for element in set(two) - set(three):  # every FMI 2.0 variable is an FMI 3.0 one, or an array's element
+        assert three[element.split("[")[0]].dimensions, element
+
+
+def _input_signal(fmu2):
+    inputs = [v.name for v in _variables(fmu2).values() if v.causality == "input" and v.type == "Real"]
+    t = np.linspace(0.0, STOP, 501)
+    signal = np.zeros(t.size, dtype=[("time", float)] + [(n, float) for n in inputs])
+    signal["time"] = t
+    for j, n in enumerate(inputs):
+        signal[n] = np.sin(2 * np.pi * t / 0.05 + j) + (np.mod(t, 0.05) < 0.025)
+    return signal if inputs else None
+
+
+@pytest.mark.parametrize("name", [*CASES, "plant"])
+def test_fmpy_runs_the_fmi3_fmu_as_its_fmi2_twin(twins, name):
+    from fmpy import simulate_fmu
+
+    fmu2, fmu3 = twins[name]
+    outputs = [v.name for v in _variables(fmu2).values() if v.causality == "output"]
+    starts2, starts3 = _array_set(name, fmu2)
+    options = dict(stop_time=STOP, step_size=1e-3, output_interval=1e-3, output=outputs, input=_input_signal(fmu2))
+    two = simulate_fmu(str(fmu2), start_values=starts2, **options)
+    three = simulate_fmu(str(fmu3), start_values=starts3, **options)
+    assert len(two) == len(three) == 501
+    moving = 0
+    for output in outputs:
+        reference = two[output].astype(float)
+        np.testing.assert_allclose(three[output].astype(float), reference, rtol=0,
+                                   atol=1e-12 * max(1.0, float(np.max(np.abs(reference)))), err_msg=output)
+        moving += np.ptp(reference) > 0
+    assert moving, "no output moved: the comparison would prove nothing"
+
+
+def _host3_arguments(fmu3, folder):
+    from fmpy import extract, read_model_description
+
+    md = read_model_description(str(fmu3))
+    directory = extract(str(fmu3), str(folder))
+    scalars = [v for v in md.modelVariables if not v.dimensions and v.type == "Float64"]
+    inputs = [v.valueReference for v in scalars if v.causality == "input"]
+    outputs = [v.valueReference for v in scalars if v.causality == "output"]
+    return ["--fmu", str(Path(directory).resolve()), md.coSimulation.modelIdentifier, md.instantiationToken,
+            ",".join(map(str, inputs)) or "-", ",".join(map(str, outputs)) or "-"]
+
+
+def _sets(name, fmu2, fmu3):
+    """The hosts' --set-real (FMI 2.0) and --set (FMI 3.0) options of the case's array set."""
+    starts2, starts3 = _array_set(name, fmu2)
+    two = [a for element, value in starts2.items() for a in ("--set-real", f"{_variables(fmu2)[element].valueReference}={value!r}")]
+    three = [a for array, values in starts3.items()
+             for a in ("--set", f"{_variables(fmu3)[array].valueReference}={','.join(map(repr, values))}")]
+    return two, three
+
+
+@pytest.mark.parametrize("steps", ["stop/500", "random"])
+@pytest.mark.parametrize("name", [*CASES, "plant"])
+def test_c_hosts_keeping_time_as_t_plus_h_see_the_fmi3_fmu_as_its_twin(twins, c_host, fmi3_host, tmp_path, name, steps):
+    fmu2, fmu3 = twins[name]
+    stepping = ["--stop", STOP, "--steps", 500] if steps == "stop/500" else ["--random", 7, 1e-5, 5e-3, 400]
+    set2, set3 = _sets(name, fmu2, fmu3)
+    fmi2_fmu = fmu_arguments(fmu2, tmp_path / "two")
+    two = run_host(c_host, [[*fmi2_fmu, *set2]], *stepping, *(["0"] if steps == "random" else []),
+                   "--teardown", "atexit", "--csv", tmp_path / "two.csv")
+    assert two.returncode == 0, two.stderr[-2000:]
+    three = subprocess.run([str(fmi3_host), *map(str, stepping), *set3, "--teardown", "atexit", "--csv",
+                            str(tmp_path / "three.csv"), *_host3_arguments(fmu3, tmp_path / "three")],
+                           capture_output=True, text=True, timeout=300)
+    assert three.returncode == 0 and "exit handler: atexit done" in three.stderr, three.stderr[-2000:]
+    rows2, rows3 = host_rows(tmp_path / "two.csv")[(0, 0, 0)], host_rows(tmp_path / "three.csv")[(0, 0, 0)]
+    assert rows2.shape == rows3.shape and rows2.shape[0] > 400
+    if steps == "stop/500":
+        assert rows3[-1, 0] == STOP
+    scale = max(1.0, float(np.max(np.abs(rows2))))
+    np.testing.assert_allclose(rows3, rows2, rtol=0, atol=1e-12 * scale)
+    assert np.ptp(rows2[:, 1:], axis=0).max() > 0
+
+
+@pytest.mark.parametrize("name", ["shaper zvd", "filter hanning2", "ekf tuner", "stos controller", "reference player",
+                                  "profile generator", "plant"])
+def test_the_fmi3_host_under_valgrind_finds_no_error_and_no_leak(twins, fmi3_host, tmp_path, name):
+    _, fmu3 = twins[name]
+    fmu2 = twins[name][0]
+    _, set3 = _sets(name, fmu2, fmu3)
+    for teardown in ("normal", "atexit"):
+        completed = subprocess.run(
+            ["valgrind", "--tool=memcheck", "--leak-check=full", "--show-leak-kinds=definite,indirect,possible",
+             "--errors-for-leak-kinds=definite,indirect,possible", "--error-exitcode=99", str(fmi3_host),
+             "--stop", "0.05", "--steps", "50", *set3, "--teardown", teardown,
+             *_host3_arguments(fmu3, tmp_path / teardown)],
+            capture_output=True, text=True, timeout=300)
+        assert completed.returncode == 0, completed.stderr[-3000:]
+        assert "ERROR SUMMARY: 0 errors" in completed.stderr
