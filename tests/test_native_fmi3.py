@@ -202,3 +202,44 @@ def test_the_fmi3_host_under_valgrind_finds_no_error_and_no_leak(twins, fmi3_hos
             capture_output=True, text=True, timeout=300)
         assert completed.returncode == 0, completed.stderr[-3000:]
         assert "ERROR SUMMARY: 0 errors" in completed.stderr
+
+
+@pytest.mark.parametrize("name", [*CASES, "plant"])
+def test_the_command_terminals_validate_and_name_the_command_variables(twins, name):
+    import zipfile
+
+    from lxml import etree
+
+    import fmpy
+
+    _, fmu3 = twins[name]
+    schema = etree.XMLSchema(etree.parse(str(Path(fmpy.__file__).parent / "schema" / "fmi3" / "fmi3TerminalsAndIcons.xsd")))
+    with zipfile.ZipFile(fmu3) as archive:
+        document = etree.fromstring(archive.read("terminalsAndIcons/terminalsAndIcons.xml"))
+        assert "terminalsAndIcons/icon.png" in archive.namelist()
+    schema.assertValid(document)
+    variables = _variables(fmu3)
+    terminals = {t.get("name"): t.find("TerminalMemberVariable") for t in document.iter("Terminal")}
+    assert terminals, "no command terminal"
+    for terminal, causality in (("command_in", "input"), ("command_out", "output")):
+        if terminal in terminals:
+            member = terminals[terminal]
+            assert member.get("memberName") == "command" and member.get("variableKind") == "signal"
+            assert variables[member.get("variableName")].causality == causality
+
+
+def test_the_cli_builds_a_native_fmu_as_fmi3_and_refuses_fmi3_for_pythonfmu(tmp_path, capsys):
+    from fmpy import read_model_description
+
+    from shapefmu.cli import main
+
+    out = tmp_path / "STOS3.fmu"
+    assert main(["build", "stos-controller", "--native", "--fmi-version", "3.0", "--param", "b=3000", "-o", str(out)]) == 0
+    description = read_model_description(str(out))
+    variables = {v.name: v for v in description.modelVariables}
+    assert description.fmiVersion == "3.0" and float(variables["b"].start) == 3000.0
+    assert [int(d.start) for d in variables["f"].dimensions] == [4]
+    with pytest.raises(SystemExit):
+        main(["build", "shaper", "--mode", "2000:0.01", "--fmi-version", "3.0", "-o", str(tmp_path / "S.fmu")])
+    assert "--fmi-version 3.0 needs --native: the pythonfmu FMUs are FMI 2.0 only" in capsys.readouterr().err
+    assert not (tmp_path / "S.fmu").exists()

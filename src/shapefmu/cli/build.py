@@ -9,7 +9,7 @@
         (any parameter of the FMU, typed as the FMU declares it, e.g. --param kind=zvd --param f[1]=40)
     shapefmu build shaper --native ...; shape-filter --native; ekf-tuner --native; build --native (every
         FMU that has one): the native C twin (no Python on the host; linux64, win64 and aarch64-linux
-        binaries; shapefmu.fmi.native.twins)
+        binaries; shapefmu.fmi.native.twins); with --fmi-version 3.0 as FMI 3.0 FMUs (array parameters)
 
 Targets are registered in ``TARGETS``: a name -> (help, add_arguments(parser), build(args) -> [paths]).
 Another target (e.g. ``reference solution.json -o fmus/TimeOptimal.fmu``) is one more entry.
@@ -30,6 +30,7 @@ def _add_all(parser):
     parser.add_argument("-o", "--out", default="fmus", type=output_folder, help="output directory (default fmus/)")
     parser.add_argument("--native", action="store_true",
                         help="the native C twin of every FMU that has one (same names), besides the plants")
+    _add_fmi_version(parser)
     parser.add_argument("--models", help="folder of plant models to build as native FMUs "
                         "(default: the papers' models that ship with shapefmu, see shapefmu plant list)")
 
@@ -37,24 +38,39 @@ def _add_all(parser):
 def _build_all(args):
     from shapefmu.fmi.native import build_all as build_all_plants
 
+    version = _fmi_version(args)
     if args.native:
         from shapefmu.fmi.native.twins import build_all_native
 
-        return [*build_all_native(args.out), *build_all_plants(args.models, args.out)]
+        return [*build_all_native(args.out, version), *build_all_plants(args.models, args.out, fmi_version=version)]
     return [*build_all(args.out), *build_all_plants(args.models, args.out)]
+
+
+def _add_fmi_version(parser):
+    parser.add_argument("--fmi-version", choices=("2.0", "3.0"), default="2.0",
+                        help="FMI version of the native FMUs (default 2.0; 3.0 needs --native)")
 
 
 def _add_native(parser):
     parser.add_argument("--native", action="store_true", help="the native C twin (no Python on the host; linux64, "
                         "win64 and aarch64-linux binaries), designed at build time")
+    _add_fmi_version(parser)
+
+
+def _fmi_version(args) -> str:
+    """--fmi-version, refused for the pythonfmu FMUs (FMI 2.0 only)."""
+    if args.fmi_version != "2.0" and not args.native:
+        raise ValueError(f"--fmi-version {args.fmi_version} needs --native: the pythonfmu FMUs are FMI 2.0 only")
+    return args.fmi_version
 
 
 def _builder(args):
-    """The pythonfmu builder, or the native twin's for --native."""
+    """The pythonfmu builder, or the native twin's for --native (in --fmi-version)."""
+    version = _fmi_version(args)
     if args.native:
         from shapefmu.fmi.native.twins import build_native
 
-        return build_native
+        return lambda name, out_path, **starts: build_native(name, out_path, fmi_version=version, **starts)
     return build_fmu
 
 

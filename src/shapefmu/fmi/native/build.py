@@ -102,8 +102,15 @@ def build_plant_fmu(model, out_path, *, name: str | None = None, fmi_version: st
         note = build_binaries(root, identifier, c_files, f"plant {part.name}", fmi_version)
         if note:
             print(note, file=sys.stderr)
-        xml = (description.model_description(part, guid, tuple(c_files)) if fmi_version == "2.0"
-               else _description3(part, identifier, guid))
+        if fmi_version == "2.0":
+            xml = description.model_description(part, guid, tuple(c_files))
+        else:
+            xml = _description3(part, identifier, guid)
+            # one input is the command the plant takes; several inputs are no one command
+            command = part.inputs[0].name if len(part.inputs) == 1 else None
+            (root / "terminalsAndIcons").mkdir()
+            (root / "terminalsAndIcons" / "terminalsAndIcons.xml").write_text(
+                description3.terminals_and_icons(command, None), encoding="utf-8")
         (root / "modelDescription.xml").write_text(xml, encoding="utf-8")
         add_documentation(root, _about(part))
         zip_fmu(root, out_path)
@@ -154,10 +161,10 @@ def model_from_file(path):
         raise ValueError(f"{path}: the model file raised {type(error).__name__}: {error}") from None
 
 
-def build_all(models_dir=None, out_dir="fmus") -> list[Path]:
+def build_all(models_dir=None, out_dir="fmus", *, fmi_version: str = "2.0") -> list[Path]:
     """Build one FMU per plant model in ``models_dir`` (every *.toml, and every *.py defining
     ``plant()``; default: the models that ship with shapefmu) into ``out_dir``, named by
-    ``fmu_file_name``; returns the paths."""
+    ``fmu_file_name``, as FMI ``fmi_version`` FMUs; returns the paths."""
     from shapefmu.plants.shipped import models_folder
 
     models_dir, out_dir = Path(models_dir) if models_dir is not None else models_folder(), Path(out_dir)
@@ -166,9 +173,10 @@ def build_all(models_dir=None, out_dir="fmus") -> list[Path]:
     built = []
     for path in sorted(models_dir.glob("*.toml")):
         part = to_model_part(path)
-        built.append(build_plant_fmu(path, out_dir / fmu_file_name(part.name)))
+        built.append(build_plant_fmu(path, out_dir / fmu_file_name(part.name), fmi_version=fmi_version))
     for path in sorted(models_dir.glob("*.py")):
         model = model_from_file(path)
         if model is not None:
-            built.append(build_plant_fmu(model, out_dir / fmu_file_name(to_model_part(model).name)))
+            built.append(build_plant_fmu(model, out_dir / fmu_file_name(to_model_part(model).name),
+                                         fmi_version=fmi_version))
     return built

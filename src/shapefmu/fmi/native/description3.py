@@ -200,6 +200,30 @@ def model_description3(*, model_name: str, identifier: str, token: str, descript
     return '<?xml version="1.0" encoding="UTF-8"?>\n' + tostring(root, encoding="unicode") + "\n"
 
 
+# The command each native twin takes and gives (FMI 3.0 terminals): (command in, command out).
+TWIN_TERMINALS = {"Shaper": ("u", "y"), "ShapeFilter": ("u", "y"), "EKFTuner": ("u", "y"),
+                  "STOSController": ("target", "u"), "ReferencePlayer": (None, "y"),
+                  "ProfileGenerator": (None, "position")}
+
+
+def terminals_and_icons(command_in: str | None, command_out: str | None) -> str:
+    """terminalsAndIcons/terminalsAndIcons.xml (FMI 3.0 section 2.4.9) with the FMU's command
+    terminals: ``command_in`` (an input) and ``command_out`` (an output), each one signal member named
+    ``command``, matched as a plug, so a tool connects one FMU's command out to the next one's command
+    in (a profile into a shaper, a shaper into a plant)."""
+    root = Element("fmiTerminalsAndIcons", {"fmiVersion": "3.0"})
+    if command_in is not None or command_out is not None:  # a list holds one element at least
+        terminals = SubElement(root, "Terminals")
+    for name, variable, text in (("command_in", command_in, "the command this FMU takes"),
+                                 ("command_out", command_out, "the command this FMU gives")):
+        if variable is not None:
+            terminal = SubElement(terminals, "Terminal", {"name": name, "matchingRule": "plug", "description": text})
+            SubElement(terminal, "TerminalMemberVariable",
+                       {"variableName": variable, "memberName": "command", "variableKind": "signal"})
+    indent(root, space="  ")
+    return '<?xml version="1.0" encoding="UTF-8"?>\n' + tostring(root, encoding="unicode") + "\n"
+
+
 def plant_slots(part) -> list[Slot]:
     """The slots of a plant's model part (``c/plant_fmi2.c``): time, states, derivatives, inputs,
     outputs, parameters."""

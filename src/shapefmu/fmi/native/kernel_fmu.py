@@ -112,6 +112,9 @@ def write_native_fmu(name: str, out_path, slave, variables, values: dict, depend
                 model_name=name, identifier=name, token=guid, description=text,
                 slots=description3.twin_slots(variables, values), dependencies=dependencies,
                 log_categories=log_categories, experiment=slave.experiment())
+            (root / "terminalsAndIcons").mkdir()
+            (root / "terminalsAndIcons" / "terminalsAndIcons.xml").write_text(
+                description3.terminals_and_icons(*description3.TWIN_TERMINALS[name]), encoding="utf-8")
         (root / "modelDescription.xml").write_text(xml, encoding="utf-8")
         add_documentation(root, about)
         zip_fmu(root, out_path)
