@@ -243,3 +243,174 @@ def test_the_cli_builds_a_native_fmu_as_fmi3_and_refuses_fmi3_for_pythonfmu(tmp_
         main(["build", "shaper", "--mode", "2000:0.01", "--fmi-version", "3.0", "-o", str(tmp_path / "S.fmu")])
     assert "--fmi-version 3.0 needs --native: the pythonfmu FMUs are FMI 2.0 only" in capsys.readouterr().err
     assert not (tmp_path / "S.fmu").exists()
+    clocked = tmp_path / "EKF3.fmu"
+    assert main(["build", "ekf-tuner", "--native", "--fmi-version", "3.0", "--clock", "--ts", "0.002", "-o",
+                 str(clocked)]) == 0
+    assert _interval(clocked) == 0.002 and _clock(clocked).name == "sample"
+    with pytest.raises(SystemExit):
+        main(["build", "ekf-tuner", "--native", "--clock", "-o", str(tmp_path / "E.fmu")])
+    assert "--clock needs --fmi-version 3.0" in capsys.readouterr().err
+
+
+# ---------------------------------------------------------------- --clock: the periodic input clock
+
+SAMPLED = [name for name in CASES if name != "reference player"]
+
+
+@pytest.fixture(scope="module")
+def clocked(tmp_path_factory):
+    """{name: FMI 3.0 FMU built with --clock} of every sampled case."""
+    from shapefmu.fmi.native.twins import build_native
+
+    folder = tmp_path_factory.mktemp("fmi3_clocked")
+
+    def build(name):
+        model, starts, _ = CASES[name]
+        return build_native(model, folder / f"{name.replace(' ', '_').replace(':', '_')}.fmu", fmi_version="3.0",
+                            clock=True, **starts)
+
+    with ThreadPoolExecutor(2) as pool:
+        jobs = {name: pool.submit(build, name) for name in SAMPLED}
+        return {name: job.result() for name, job in jobs.items()}
+
+
+def _clock(fmu):
+    (clock,) = [v for v in _variables(fmu).values() if v.type == "Clock"]
+    return clock
+
+
+def _interval(fmu) -> float:
+    """The clock's intervalDecimal as modelDescription.xml declares it."""
+    import re
+    import zipfile
+
+    text = zipfile.ZipFile(fmu).read("modelDescription.xml").decode()
+    return float(re.search(r'intervalDecimal="([^"]+)"', text).group(1))
+
+
+@pytest.mark.parametrize("name", SAMPLED)
+def test_a_clocked_fmu_declares_its_sample_clock_and_clocks_its_inputs_and_outputs(twins, clocked, name):
+    from fmpy import read_model_description
+    from fmpy.validation import validate_fmu
+
+    fmu = clocked[name]
+    assert validate_fmu(str(fmu)) == []
+    description = read_model_description(str(fmu))
+    assert description.coSimulation.hasEventMode
+    clock = _clock(fmu)
+    assert clock.causality == "input" and clock.intervalVariability == "constant"
+    assert _interval(fmu) == float(_variables(twins[name][0])["Ts"].start)  # no case adjusts Ts
+    for variable in description.modelVariables:
+        if variable.causality in ("input", "output") and variable.type != "Clock":
+            assert variable.variability == "discrete"
+            assert [c.valueReference for c in variable.clocks] == [clock.valueReference]
+
+
+@pytest.mark.parametrize("per_tick", [1, 2])
+@pytest.mark.parametrize("name", SAMPLED)
+def test_a_host_ticking_the_clock_sees_the_clocked_fmu_as_the_fmi2_twin(twins, clocked, c_host, fmi3_host, tmp_path,
+                                                                        name, per_tick):
+    """The clock ticks every Ts from t = 0; the hosts take per_tick steps of t += h between ticks: rows alike."""
+    fmu2, _ = twins[name]
+    fmu3 = clocked[name]
+    ts = _interval(fmu3)
+    steps = round(STOP / ts) * per_tick
+    two = run_host(c_host, [fmu_arguments(fmu2, tmp_path / "two")], "--stop", STOP, "--steps", steps, "--teardown",
+                   "atexit", "--csv", tmp_path / "two.csv")
+    assert two.returncode == 0, two.stderr[-2000:]
+    three = subprocess.run([str(fmi3_host), "--stop", str(STOP), "--steps", str(steps), "--clock",
+                            str(_clock(fmu3).valueReference), repr(ts), "--teardown", "atexit", "--csv",
+                            str(tmp_path / "three.csv"), *_host3_arguments(fmu3, tmp_path / "three")],
+                           capture_output=True, text=True, timeout=300)
+    assert three.returncode == 0 and "exit handler: atexit done" in three.stderr, three.stderr[-2000:]
+    rows2, rows3 = host_rows(tmp_path / "two.csv")[(0, 0, 0)], host_rows(tmp_path / "three.csv")[(0, 0, 0)]
+    assert rows2.shape == rows3.shape and rows2.shape[0] >= steps + 1  # + 1: a trimmed sliver of a last step
+    np.testing.assert_allclose(rows3, rows2, rtol=0, atol=1e-12 * max(1.0, float(np.max(np.abs(rows2)))))
+    assert np.ptp(rows2[:, 1:], axis=0).max() > 0
+
+
+def _clocked_slave(fmu, event_mode=True):
+    from fmpy import extract, read_model_description
+    from fmpy.fmi3 import FMU3Slave
+
+    md = read_model_description(str(fmu))
+    slave = FMU3Slave(guid=md.instantiationToken, unzipDirectory=extract(str(fmu)),
+                      modelIdentifier=md.coSimulation.modelIdentifier, instanceName="clocked")
+    slave.instantiate(eventModeUsed=event_mode)
+    return slave
+
+
+def test_a_clocked_fmu_refuses_every_run_that_would_not_tick_it_rightly(clocked, capfd):
+    """Each refusal logs a message naming the tick and returns fmi3Error (fmpy raises on it)."""
+    from fmpy.fmi1 import FMICallException
+
+    fmu = clocked["shaper zvd"]
+    clock, ts = _clock(fmu).valueReference, _interval(fmu)
+    with pytest.raises(Exception):
+        _clocked_slave(fmu, event_mode=False)
+    assert "instantiate it with eventModeUsed = fmi3True" in capfd.readouterr().out
+
+    def started():
+        slave = _clocked_slave(fmu)
+        slave.enterInitializationMode(startTime=0.0)
+        slave.exitInitializationMode()  # in Event Mode now, at the tick t = 0
+        return slave
+
+    refusals = {
+        "not ticked before Step Mode": (lambda s: s.enterStepMode(), "t = 0 is a tick of the clock 'sample', which was not set"),
+        "a step across a tick": (lambda s: (s.setClock([clock], [True]), s.updateDiscreteStates(), s.enterStepMode(),
+                                            s.doStep(0.0, 1.5 * ts)), "passes the tick of the clock 'sample' at 0.001"),
+        "a step from an untaken tick": (lambda s: (s.setClock([clock], [True]), s.enterStepMode(), s.doStep(0.0, ts),
+                                                   s.doStep(ts, ts)), "was not ticked at t = 0.001"),
+        "a tick off the grid": (lambda s: (s.setClock([clock], [True]), s.enterStepMode(), s.doStep(0.0, ts / 2),
+                                           s.enterEventMode(), s.setClock([clock], [True])),
+                                "ticks at t0 + k Ts (Ts = 0.001), not at t = 0.0005"),
+    }
+    for case, (calls, words) in refusals.items():
+        slave = started()
+        with pytest.raises(FMICallException) as refused:
+            calls(slave)
+        assert refused.value.status == 3, case
+        assert words in capfd.readouterr().out, case
+        slave.freeInstance()
+    slave = _clocked_slave(fmu)  # a Ts other than the clock's interval
+    slave.enterInitializationMode(startTime=0.0)
+    variables = _variables(fmu)
+    slave.setFloat64([variables["Ts"].valueReference], [2e-3])
+    with pytest.raises(FMICallException):
+        slave.exitInitializationMode()
+    assert "Ts = 0.002, but this FMU's clock 'sample' ticks every 0.001 s" in capfd.readouterr().out
+    slave.freeInstance()
+
+
+def test_fmpy_which_ticks_no_clock_stops_on_a_clocked_fmu_with_the_reason(clocked, capfd):
+    """fmpy 0.3.32 never calls fmi3SetClock: the run stops, it is never silently the unclocked one."""
+    from fmpy import simulate_fmu
+
+    for event_mode in (False, True):
+        with pytest.raises(Exception):
+            simulate_fmu(str(clocked["shaper zvd"]), stop_time=0.01, output_interval=1e-3, use_event_mode=event_mode)
+        out = capfd.readouterr().out
+        assert ("eventModeUsed = fmi3True" in out) if not event_mode else ("which was not set" in out), out[-500:]
+
+
+def test_clock_builds_are_refused_where_no_clock_can_tick(tmp_path):
+    from shapefmu.fmi.native.twins import build_native
+
+    with pytest.raises(ValueError, match="--clock: the ReferencePlayer FMU has no sample period Ts"):
+        build_native("ReferencePlayer", tmp_path / "R.fmu", fmi_version="3.0", clock=True)
+    with pytest.raises(ValueError, match="--clock needs --fmi-version 3.0"):
+        build_native("Shaper", tmp_path / "S.fmu", clock=True)
+    assert not list(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("name", ["shaper zvd", "ekf tuner", "profile generator"])
+def test_a_clocked_fmu_under_valgrind_finds_no_error_and_no_leak(clocked, fmi3_host, tmp_path, name):
+    fmu = clocked[name]
+    completed = subprocess.run(
+        ["valgrind", "--tool=memcheck", "--leak-check=full", "--show-leak-kinds=definite,indirect,possible",
+         "--errors-for-leak-kinds=definite,indirect,possible", "--error-exitcode=99", str(fmi3_host),
+         "--stop", "0.05", "--steps", "100", "--clock", str(_clock(fmu).valueReference), repr(_interval(fmu)),
+         "--teardown", "atexit", *_host3_arguments(fmu, tmp_path)], capture_output=True, text=True, timeout=300)
+    assert completed.returncode == 0, completed.stderr[-3000:]
+    assert "ERROR SUMMARY: 0 errors" in completed.stderr

@@ -15,6 +15,11 @@
  *                        1 on the first half of each period (defaults A = 1, P = 0.05), as fmi2_host
  *   --set VR=V1[,V2...]  in initialization mode: set Float64 variable VR (an array takes its
  *                        elements in order; repeatable)
+ *   --clock VR TS        the FMU's periodic input clock VR ticks every TS from t = 0: instantiate with
+ *                        Event Mode, end every step at the next tick, and at each tick (t = 0 just
+ *                        after initialisation included) set the inputs in Event Mode, fmi3SetClock,
+ *                        fmi3UpdateDiscreteStates, fmi3EnterStepMode; inputs are set at ticks only
+ *                        (they are clocked), the CSV's input columns still say u_j(t)
  *   --teardown MODE      normal: fmi3Terminate, fmi3FreeInstance, dlclose at the end of main;
  *                        atexit: fmi3Terminate and fmi3FreeInstance from an exit handler registered
  *                        before the FMU is loaded (so it runs after every handler the FMU registers)
@@ -111,6 +116,8 @@ int main(int argc, char** argv)
     fmi3ValueReference in[MAX_VRS], out[MAX_VRS], set_vr[MAX_SETS];
     static double set_values[MAX_SETS][MAX_ELEMENTS];
     size_t n_in = 0, n_out = 0, n_set = 0, set_count[MAX_SETS], k;
+    fmi3ValueReference clock_vr = 0;
+    double clock_ts = 0.0;
     for (int a = 1; a < argc; a++) {
         const char* o = argv[a];
         int more = argc - 1 - a;
@@ -123,6 +130,10 @@ int main(int argc, char** argv)
         else if (more >= 1 && strcmp(o, "--amplitude") == 0) amplitude = atof(argv[++a]);
         else if (more >= 1 && strcmp(o, "--period") == 0) period = atof(argv[++a]);
         else if (more >= 1 && strcmp(o, "--teardown") == 0) teardown = argv[++a];
+        else if (more >= 2 && strcmp(o, "--clock") == 0) {
+            clock_vr = (fmi3ValueReference)strtoul(argv[++a], NULL, 10);
+            clock_ts = atof(argv[++a]);
+        }
         else if (more >= 1 && strcmp(o, "--csv") == 0) csv_path = argv[++a];
         else if (more >= 1 && strcmp(o, "--set") == 0 && n_set < MAX_SETS) {
             char* equals = strchr(argv[++a], '=');
@@ -162,10 +173,14 @@ int main(int argc, char** argv)
     fmi3SetFloat64TYPE* set_float64 = (fmi3SetFloat64TYPE*)symbol("fmi3SetFloat64");
     fmi3GetFloat64TYPE* get_float64 = (fmi3GetFloat64TYPE*)symbol("fmi3GetFloat64");
     fmi3DoStepTYPE* do_step = (fmi3DoStepTYPE*)symbol("fmi3DoStep");
+    fmi3EnterEventModeTYPE* enter_event = (fmi3EnterEventModeTYPE*)symbol("fmi3EnterEventMode");
+    fmi3SetClockTYPE* set_clock = (fmi3SetClockTYPE*)symbol("fmi3SetClock");
+    fmi3UpdateDiscreteStatesTYPE* update = (fmi3UpdateDiscreteStatesTYPE*)symbol("fmi3UpdateDiscreteStates");
+    fmi3EnterStepModeTYPE* enter_step = (fmi3EnterStepModeTYPE*)symbol("fmi3EnterStepMode");
     terminate_ = (fmi3TerminateTYPE*)symbol("fmi3Terminate");
     free_instance = (fmi3FreeInstanceTYPE*)symbol("fmi3FreeInstance");
     snprintf(path, sizeof(path), "%s/resources/", dir);
-    instance = instantiate("host", token, path, fmi3False, fmi3False, fmi3False, fmi3False, NULL, 0, NULL, logger, NULL);
+    instance = instantiate("host", token, path, fmi3False, fmi3False, clock_ts > 0.0, fmi3False, NULL, 0, NULL, logger, NULL);
     if (instance == NULL) {
         fprintf(stderr, "FAIL fmi3InstantiateCoSimulation returned NULL\n");
         return 2;
@@ -174,9 +189,24 @@ int main(int argc, char** argv)
     for (k = 0; k < n_set; k++) check(set_float64(instance, &set_vr[k], 1, set_values[k], set_count[k]), "fmi3SetFloat64", 0.0, 0);
     check(exit_init(instance), "fmi3ExitInitializationMode", 0.0, 0);
     double t = 0.0, h = steps > 0 ? stop / (double)steps : 0.0, u[MAX_VRS], y[MAX_VRS];
+    long tick = 0;  /* the next tick, tick * clock_ts */
     for (long n = 0;; n++) {
         for (k = 0; k < n_in; k++) u[k] = input(t, k, amplitude, period);
-        if (n_in) check(set_float64(instance, in, n_in, u, n_in), "fmi3SetFloat64", t, 0);
+        const int at_tick = clock_ts > 0.0 && fabs(t - (double)tick * clock_ts) <= 1e-6 * clock_ts;
+        if (at_tick) {  /* after initialisation the FMU is in Event Mode already */
+            if (n > 0) check(enter_event(instance), "fmi3EnterEventMode", t, 0);
+            if (n_in) check(set_float64(instance, in, n_in, u, n_in), "fmi3SetFloat64", t, 0);
+            const fmi3Clock active = fmi3True;
+            check(set_clock(instance, &clock_vr, 1, &active), "fmi3SetClock", t, 0);
+            fmi3Boolean more_updates, stop_now, nominals, values, defined;
+            fmi3Float64 next_event;
+            check(update(instance, &more_updates, &stop_now, &nominals, &values, &defined, &next_event),
+                  "fmi3UpdateDiscreteStates", t, 0);
+            check(enter_step(instance), "fmi3EnterStepMode", t, 0);
+            tick++;
+        } else if (n_in && clock_ts == 0.0) {
+            check(set_float64(instance, in, n_in, u, n_in), "fmi3SetFloat64", t, 0);
+        }
         if (n_out) check(get_float64(instance, out, n_out, y, n_out), "fmi3GetFloat64", t, 0);
         if (csv != NULL) {
             fprintf(csv, "0,0,0,%.17g", t);
@@ -193,6 +223,10 @@ int main(int argc, char** argv)
             if (!(t < stop)) break;
             if (t + step > stop) step = stop - t; /* the trimmed last step of fmuCheck and OMSimulator */
         }
+        /* a step that would pass the next tick ends there; one landing on it within 1e-6 Ts (the FMU's
+         * tolerance, sample_clock.h) is kept, so t += h as fmi2_host keeps it */
+        if (clock_ts > 0.0 && t + step > (double)tick * clock_ts + 1e-6 * clock_ts)
+            step = (double)tick * clock_ts - t;
         fmi3Boolean event, terminate, early;
         fmi3Float64 last;
         check(do_step(instance, t, step, fmi3True, &event, &terminate, &early, &last), "fmi3DoStep", t, 0);

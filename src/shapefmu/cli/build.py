@@ -9,7 +9,8 @@
         (any parameter of the FMU, typed as the FMU declares it, e.g. --param kind=zvd --param f[1]=40)
     shapefmu build shaper --native ...; shape-filter --native; ekf-tuner --native; build --native (every
         FMU that has one): the native C twin (no Python on the host; linux64, win64 and aarch64-linux
-        binaries; shapefmu.fmi.native.twins); with --fmi-version 3.0 as FMI 3.0 FMUs (array parameters)
+        binaries; shapefmu.fmi.native.twins); with --fmi-version 3.0 as FMI 3.0 FMUs (array parameters),
+        and --clock: a sampled FMU with a periodic input clock of its Ts, for hosts that tick clocks
 
 Targets are registered in ``TARGETS``: a name -> (help, add_arguments(parser), build(args) -> [paths]).
 Another target (e.g. ``reference solution.json -o fmus/TimeOptimal.fmu``) is one more entry.
@@ -55,6 +56,10 @@ def _add_native(parser):
     parser.add_argument("--native", action="store_true", help="the native C twin (no Python on the host; linux64, "
                         "win64 and aarch64-linux binaries), designed at build time")
     _add_fmi_version(parser)
+    parser.add_argument("--clock", action="store_true",
+                        help="with --native --fmi-version 3.0: a periodic input clock of interval Ts whose ticks the FMU "
+                        "samples at (Co-Simulation with Event Mode, for hosts that tick clocks); without it the FMU "
+                        "samples on the grid t0 + k Ts itself, which every host runs")
 
 
 def _fmi_version(args) -> str:
@@ -70,7 +75,10 @@ def _builder(args):
     if args.native:
         from shapefmu.fmi.native.twins import build_native
 
-        return lambda name, out_path, **starts: build_native(name, out_path, fmi_version=version, **starts)
+        return lambda name, out_path, **starts: build_native(name, out_path, fmi_version=version, clock=args.clock,
+                                                             **starts)
+    if args.clock:
+        raise ValueError("--clock needs --native --fmi-version 3.0: the pythonfmu FMUs are FMI 2.0 only")
     return build_fmu
 
 

@@ -14,7 +14,7 @@ from pathlib import Path
 from shapefmu.fmi.documentation import add_documentation
 from shapefmu.fmi.native import description, description3, linear
 from shapefmu.fmi.native.codegen import write_sources
-from shapefmu.fmi.native.compile import build_binaries, build_description, copy_c_files, layer_files, zip_fmu
+from shapefmu.fmi.native.compile import build_binaries, build_description, copy_c_files, write_layer, zip_fmu
 from shapefmu.fmi.native.model_part import ModelPart, check_name
 from shapefmu.fmi.native.nonlinear import NonlinearPlant
 from shapefmu.plants import as_plant
@@ -81,8 +81,6 @@ def build_plant_fmu(model, out_path, *, name: str | None = None, fmi_version: st
     ``fmi_version`` is "2.0" (default) or "3.0" (the same variables as Float64, the same
     Co-Simulation step: the two give identical numbers).
     """
-    layer_sources, layer_headers = layer_files(fmi_version)
-    wrapper_sources = (*layer_sources, *PLANT_SOURCES)
     out_path = Path(out_path)
     if out_path.is_dir():
         raise ValueError(f"out_path {str(out_path)!r} is a folder; give the FMU file to write, e.g. {out_path / 'Plant.fmu'}")
@@ -92,7 +90,8 @@ def build_plant_fmu(model, out_path, *, name: str | None = None, fmi_version: st
         root = Path(tmp)
         sources = root / "sources"
         sources.mkdir()
-        copy_c_files(sources, wrapper_sources + layer_headers + PLANT_HEADERS)
+        copy_c_files(sources, PLANT_SOURCES + PLANT_HEADERS)
+        wrapper_sources = [*write_layer(sources, fmi_version), *PLANT_SOURCES]
         # The GUID hashes the sources, which include the GUID: generate with a placeholder first.
         generated = write_sources(part, "", sources)
         c_files = [*wrapper_sources, *generated]

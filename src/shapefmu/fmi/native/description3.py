@@ -104,10 +104,12 @@ def _value(slot: Slot, value) -> str:
     return repr(float(value)) if slot.type == "Real" else str(int(value))
 
 
-def _variable_element(parent, variable: Variable3, vr_of: dict) -> None:
+def _variable_element(parent, variable: Variable3, vr_of: dict, clock_vr: int | None) -> None:
     slot = variable.first
     attributes = {"name": variable.name, "valueReference": str(variable.vr), "description": slot.description,
                   "causality": slot.causality, "variability": slot.variability}
+    if clock_vr is not None and slot.causality in ("input", "output"):  # sampled at the clock's ticks
+        attributes.update(variability="discrete", clocks=str(clock_vr))
     if slot.initial:
         attributes["initial"] = slot.initial
     if slot.type == "Real" and slot.unit:
@@ -136,12 +138,15 @@ def _variable_element(parent, variable: Variable3, vr_of: dict) -> None:
 
 def model_description3(*, model_name: str, identifier: str, token: str, description: str, slots,
                        dependencies: dict, log_categories, model_exchange: bool = False,
-                       directional_derivatives: bool = False, experiment=None, generation_tool: str = "") -> str:
+                       directional_derivatives: bool = False, experiment=None, generation_tool: str = "",
+                       clock_interval: float = 0.0) -> str:
     """The FMI 3.0 modelDescription.xml of a native FMU whose model part has ``slots``.
 
     ``dependencies`` maps each output (and each state derivative) to the names of the inputs (and
     states) it depends on; ``log_categories`` are (name, description) pairs; ``experiment`` is
-    (start, stop, step) or None.
+    (start, stop, step) or None; ``clock_interval`` > 0 declares the periodic input clock ``sample``
+    (value reference: the last variable's + 1, as ``c/fmi3_layer_clock.c`` numbers it) that clocks
+    the inputs and outputs, and Event Mode.
     """
     variables = variables3(slots)
     vr_of = {s.name: v.vr for v in variables for s in v.slots} | {v.name: v.vr for v in variables}
@@ -157,7 +162,7 @@ def model_description3(*, model_name: str, identifier: str, token: str, descript
     if model_exchange:
         SubElement(root, "ModelExchange", common)
     SubElement(root, "CoSimulation", {**common, "canHandleVariableCommunicationStepSize": "true",
-                                      "hasEventMode": "false"})
+                                      "hasEventMode": "true" if clock_interval else "false"})
     units = sorted({s.unit for s in slots if s.type == "Real" and s.unit})
     if units:
         definitions = SubElement(root, "UnitDefinitions")
@@ -175,8 +180,14 @@ def model_description3(*, model_name: str, identifier: str, token: str, descript
     model_variables = SubElement(root, "ModelVariables")
     SubElement(model_variables, "Float64", {"name": "time", "valueReference": "0", "causality": "independent",
                                             "variability": "continuous", "description": "simulation time"})
+    clock_vr = len(variables) + 1
     for variable in variables:
-        _variable_element(model_variables, variable, vr_of)
+        _variable_element(model_variables, variable, vr_of, clock_vr if clock_interval else None)
+    if clock_interval:
+        SubElement(model_variables, "Clock", {
+            "name": "sample", "valueReference": str(clock_vr), "causality": "input", "variability": "discrete",
+            "intervalVariability": "constant", "intervalDecimal": repr(float(clock_interval)),
+            "description": "the FMU's sample instants t0 + k Ts: tick it at each (Event Mode, fmi3SetClock)"})
     structure = SubElement(root, "ModelStructure")
     outputs = [v for v in variables if v.first.causality == "output"]
     derivatives = [v for v in variables if v.first.derivative_of is not None]
@@ -190,7 +201,8 @@ def model_description3(*, model_name: str, identifier: str, token: str, descript
     for v in derivatives:
         SubElement(structure, "ContinuousStateDerivative",
                    {"valueReference": str(v.vr), "dependencies": " ".join(map(str, depends(v.name)))})
-    for v in sorted(outputs + derivatives, key=lambda v: v.vr):
+    # clocked outputs are no initial unknowns: they are computed at the clock's ticks (FMI 3.0 2.4.8)
+    for v in sorted((outputs if not clock_interval else []) + derivatives, key=lambda v: v.vr):
         if model_exchange:  # a plant's: on every state, input and parameter (no dependencies attribute)
             SubElement(structure, "InitialUnknown", {"valueReference": str(v.vr)})
         else:  # a twin's design, made at initialisation, depends on every parameter

@@ -39,7 +39,7 @@ def _model_c(variables, values, guid) -> str:
 {twin_variables_c("ekf_tuner_model", variables, values, MEANINGS.get, guid)}"""
 
 
-def build_native_ekf_tuner(out_path, *, fmi_version: str = "2.0", **start_values) -> Path:
+def build_native_ekf_tuner(out_path, *, fmi_version: str = "2.0", clock: bool = False, **start_values) -> Path:
     """Build the native EKFTuner FMU with ``start_values`` (parameters of the pythonfmu EKFTuner)."""
     slave = designed_slave(NAME, start_values)
     if slave.values["n"] > MAX_ORDER:
@@ -51,4 +51,5 @@ def build_native_ekf_tuner(out_path, *, fmi_version: str = "2.0", **start_values
     values = dict(slave.values)
     about = f"{sys.modules[type(slave).__module__].__doc__}\n\n{NATIVE_NOTE}"
     return write_native_fmu(NAME, out_path, slave, variables, values, slave.output_dependencies(), SOURCES, HEADERS,
-                            lambda guid: _model_c(variables, values, guid), about, fmi_version=fmi_version)
+                            lambda guid: _model_c(variables, values, guid), about, fmi_version=fmi_version,
+                            clock=clock)

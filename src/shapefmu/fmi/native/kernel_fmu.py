@@ -22,7 +22,7 @@ from types import SimpleNamespace
 
 from shapefmu.fmi.documentation import add_documentation
 from shapefmu.fmi.native import description3
-from shapefmu.fmi.native.compile import build_binaries, build_description, copy_c_files, layer_files, zip_fmu
+from shapefmu.fmi.native.compile import build_binaries, build_description, copy_c_files, write_layer, zip_fmu
 from shapefmu.fmi.python.model_description import model_description
 from shapefmu.fmi.python.slave_base import Variable
 
@@ -72,8 +72,20 @@ def twin_variables_c(table: str, variables, values: dict, meaning_of, guid: str)
             f'const TwinVariables {table} = {{"{guid}", {counts}, {table}_rows}};\n')
 
 
+def clock_interval(name: str, values: dict, fmi_version: str) -> float:
+    """The interval of the input clock of twin ``name`` built with ``--clock``: its sample period
+    (a ShapeFilter's Ts_used, which adjust_Ts may have moved off Ts, else Ts)."""
+    if fmi_version != "3.0":
+        raise ValueError(f"--clock needs --fmi-version 3.0 (clocks are FMI 3.0's), got --fmi-version {fmi_version}")
+    period = values.get("Ts_used", values.get("Ts"))
+    if period is None:
+        raise ValueError(f"--clock: the {name} FMU has no sample period Ts for its clock to tick at (it is not sampled)")
+    return float(period)
+
+
 def write_native_fmu(name: str, out_path, slave, variables, values: dict, dependencies: dict, c_sources,
-                     c_headers, model_c, about: str, log_categories=CATEGORIES, fmi_version: str = "2.0") -> Path:
+                     c_headers, model_c, about: str, log_categories=CATEGORIES, fmi_version: str = "2.0",
+                     clock: bool = False) -> Path:
     """Write the native FMU ``name`` to ``out_path`` and return the path.
 
     ``slave`` is the designed pythonfmu slave (its description and DefaultExperiment); ``variables``
@@ -82,17 +94,17 @@ def write_native_fmu(name: str, out_path, slave, variables, values: dict, depend
     ``c_headers`` the model part's files of ``fmi/native/c`` (the generic layer is added here);
     ``model_c(guid)`` the text of the generated model.c; ``about`` the documentation's account of
     what the FMU does; ``fmi_version`` "2.0" or "3.0" picks the generic layer and the model description
-    (FMI 3.0: array parameters, see ``description3``).
+    (FMI 3.0: array parameters, see ``description3``); ``clock`` (FMI 3.0) declares the periodic input
+    clock of the sample period Ts (``c/fmi3_layer_clock.c``).
     """
     out_path = Path(out_path)
-    layer_sources, layer_headers = layer_files(fmi_version)
-    sources_list = (*layer_sources, *c_sources)
+    interval = clock_interval(name, values, fmi_version) if clock else 0.0
     with tempfile.TemporaryDirectory(prefix="shapefmu_native_") as tmp:
         root = Path(tmp)
         sources = root / "sources"
         sources.mkdir()
-        copy_c_files(sources, sources_list + (*layer_headers, *c_headers))
-        c_files = [*sources_list, MODEL_SOURCE]
+        copy_c_files(sources, (*c_sources, *c_headers))
+        c_files = [*write_layer(sources, fmi_version, interval), *c_sources, MODEL_SOURCE]
         digest = hashlib.md5(model_c("").encode())
         for file in sorted(p.name for p in sources.iterdir()):
             digest.update((sources / file).read_bytes())
@@ -111,7 +123,7 @@ def write_native_fmu(name: str, out_path, slave, variables, values: dict, depend
             xml = description3.model_description3(
                 model_name=name, identifier=name, token=guid, description=text,
                 slots=description3.twin_slots(variables, values), dependencies=dependencies,
-                log_categories=log_categories, experiment=slave.experiment())
+                log_categories=log_categories, experiment=slave.experiment(), clock_interval=interval)
             (root / "terminalsAndIcons").mkdir()
             (root / "terminalsAndIcons" / "terminalsAndIcons.xml").write_text(
                 description3.terminals_and_icons(*description3.TWIN_TERMINALS[name]), encoding="utf-8")

@@ -72,7 +72,7 @@ const MotionShaper motion_shaper = {{{int(bang_bang)}, {int(closed)}, {len(times
 """
 
 
-def build_native_profile(out_path, *, fmi_version: str = "2.0", **start_values) -> Path:
+def build_native_profile(out_path, *, fmi_version: str = "2.0", clock: bool = False, **start_values) -> Path:
     """Build the native ProfileGenerator FMU with ``start_values`` (parameters of the pythonfmu one)."""
     slave = designed_slave(NAME, start_values)
     motion = slave.motion
@@ -83,4 +83,5 @@ def build_native_profile(out_path, *, fmi_version: str = "2.0", **start_values) 
     values = dict(slave.values)
     about = f"{sys.modules[type(slave).__module__].__doc__}\n\n{NATIVE_NOTE}"
     return write_native_fmu(NAME, out_path, slave, variables, values, slave.output_dependencies(), SOURCES, HEADERS,
-                            lambda guid: _model_c(variables, values, motion, guid), about, fmi_version=fmi_version)
+                            lambda guid: _model_c(variables, values, motion, guid), about, fmi_version=fmi_version,
+                            clock=clock)

@@ -54,7 +54,7 @@ const TableModel table_model = {{
 """
 
 
-def build_native_reference(out_path, *, fmi_version: str = "2.0", **start_values) -> Path:
+def build_native_reference(out_path, *, fmi_version: str = "2.0", clock: bool = False, **start_values) -> Path:
     """Build the native ReferencePlayer FMU with ``start_values`` (its ``table``, JSON text)."""
     text = start_values.get("table")
     size = len(text.encode("utf-8", "surrogatepass")) if isinstance(text, str) else 0  # a surrogate: refused below
@@ -74,4 +74,5 @@ def build_native_reference(out_path, *, fmi_version: str = "2.0", **start_values
     values = dict(slave.values)
     about = f"{sys.modules[type(slave).__module__].__doc__}\n\n{NATIVE_NOTE}"
     return write_native_fmu(NAME, out_path, slave, variables, values, slave.output_dependencies(), SOURCES, HEADERS,
-                            lambda guid: _model_c(table, values["table"], guid), about, fmi_version=fmi_version)
+                            lambda guid: _model_c(table, values["table"], guid), about, fmi_version=fmi_version,
+                            clock=clock)

@@ -116,7 +116,7 @@ def slave_max_modes(slave) -> int:
     return sum(1 for v in slave.variables if v.name.startswith("f["))
 
 
-def build_native_fmu(name: str, out_path, *, fmi_version: str = "2.0", **start_values) -> Path:
+def build_native_fmu(name: str, out_path, *, fmi_version: str = "2.0", clock: bool = False, **start_values) -> Path:
     """Build the native ``name`` ("Shaper" or "ShapeFilter") FMU with ``start_values`` to ``out_path``."""
     if name not in ("Shaper", "ShapeFilter"):
         raise ValueError(f"name must be Shaper or ShapeFilter, got {name!r}")
@@ -129,15 +129,15 @@ def build_native_fmu(name: str, out_path, *, fmi_version: str = "2.0", **start_v
     about = f"{sys.modules[type(slave).__module__].__doc__}\n\n{NATIVE_NOTE}"
     return write_native_fmu(name, out_path, slave, numbered, values, dependencies, SOURCES, HEADERS,
                             lambda guid: _model_c(slave, numbered, values, guid, capacity, closed, feedthrough), about,
-                            fmi_version=fmi_version)
+                            fmi_version=fmi_version, clock=clock)
 
 
 
-def build_native_shaper(out_path, *, fmi_version: str = "2.0", **start_values) -> Path:
+def build_native_shaper(out_path, *, fmi_version: str = "2.0", clock: bool = False, **start_values) -> Path:
     """The native Shaper FMU (``build_native_fmu("Shaper", ...)``)."""
-    return build_native_fmu("Shaper", out_path, fmi_version=fmi_version, **start_values)
+    return build_native_fmu("Shaper", out_path, fmi_version=fmi_version, clock=clock, **start_values)
 
 
-def build_native_shape_filter(out_path, *, fmi_version: str = "2.0", **start_values) -> Path:
+def build_native_shape_filter(out_path, *, fmi_version: str = "2.0", clock: bool = False, **start_values) -> Path:
     """The native ShapeFilter FMU (``build_native_fmu("ShapeFilter", ...)``)."""
-    return build_native_fmu("ShapeFilter", out_path, fmi_version=fmi_version, **start_values)
+    return build_native_fmu("ShapeFilter", out_path, fmi_version=fmi_version, clock=clock, **start_values)

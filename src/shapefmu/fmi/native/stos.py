@@ -51,7 +51,7 @@ const StosShaper stos_shaper = {{{len(times)}, {int(values["kind"] in CLOSED_FOR
 """
 
 
-def build_native_stos(out_path, *, fmi_version: str = "2.0", **start_values) -> Path:
+def build_native_stos(out_path, *, fmi_version: str = "2.0", clock: bool = False, **start_values) -> Path:
     """Build the native STOSController FMU with ``start_values`` (parameters of the pythonfmu one)."""
     slave = designed_slave(NAME, start_values)
     times, amplitudes = slave.kernel.curves["times"], slave.kernel.curves["amplitudes"]
@@ -59,4 +59,5 @@ def build_native_stos(out_path, *, fmi_version: str = "2.0", **start_values) -> 
     values = dict(slave.values)
     about = f"{sys.modules[type(slave).__module__].__doc__}\n\n{NATIVE_NOTE}"
     return write_native_fmu(NAME, out_path, slave, variables, values, slave.output_dependencies(), SOURCES, HEADERS,
-                            lambda guid: _model_c(variables, values, times, amplitudes, guid), about, fmi_version=fmi_version)
+                            lambda guid: _model_c(variables, values, times, amplitudes, guid), about, fmi_version=fmi_version,
+                            clock=clock)

@@ -24,13 +24,15 @@ TWINS = {
 }
 
 
-def build_native(name: str, out_path, *, fmi_version: str = "2.0", **start_values) -> Path:
+def build_native(name: str, out_path, *, fmi_version: str = "2.0", clock: bool = False, **start_values) -> Path:
     """The native twin of the pythonfmu FMU ``name`` with ``start_values``, written to ``out_path`` as
-    an FMI ``fmi_version`` ("2.0" or "3.0") FMU."""
+    an FMI ``fmi_version`` ("2.0" or "3.0") FMU; ``clock``: with the periodic input clock of its sample
+    period (FMI 3.0, sampled FMUs)."""
     if name not in TWINS:
         raise ValueError(f"name must be one of {', '.join(TWINS)} (the FMUs with a native C twin), got {name!r}")
     module, builder = TWINS[name]
-    return getattr(importlib.import_module(module), builder)(out_path, fmi_version=fmi_version, **start_values)
+    return getattr(importlib.import_module(module), builder)(out_path, fmi_version=fmi_version, clock=clock,
+                                                                 **start_values)
 
 
 def build_all_native(out_dir, fmi_version: str = "2.0") -> list[Path]:

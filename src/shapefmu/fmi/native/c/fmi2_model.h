@@ -65,6 +65,7 @@ typedef struct Fmi2Instance {
     int logging_on;
     double time;                 /* the FMU's time: start time, then the end of the last step */
     double start_time;           /* fmi2SetupExperiment's startTime (0 if not called) */
+    double clock_ticks;          /* ticks of the FMI 3.0 layer's input clock taken (--clock builds) */
     double *reals;               /* every variable's value, indexed by value reference */
     int *integers, *booleans;
     char *strings;               /* n_string slots of info.string_capacity + 1 characters */

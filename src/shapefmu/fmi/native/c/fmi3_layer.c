@@ -12,6 +12,7 @@
  * naming the function, the variable and the value, returns fmi3Error and puts the instance into
  * the error state.
  */
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -45,6 +46,7 @@ static int build_table(Fmi2Instance *inst, Fmi3Layer *layer) {
         return -1;
     }
     size_t n = 0, last_array = 0;
+    layer->period_slot = SIZE_MAX;
     for (int type = FMI2_REAL; type <= FMI2_STRING; type++) {
         size_t first, count;
         core_type_range(inst, (Fmi2Type)type, &first, &count);
@@ -53,7 +55,12 @@ static int build_table(Fmi2Instance *inst, Fmi3Layer *layer) {
             const Fmi2Role role = model_variable(inst, (Fmi2Type)type, slot, &name);
             if (role == FMI2_NO_VARIABLE || (role == FMI2_COMPUTED && type == FMI2_REAL && strcmp(name, "time") == 0))
                 continue;
-            const size_t length = element_base(name);
+            if (type == FMI2_REAL && (strcmp(name, "Ts_used") == 0
+                                      || (strcmp(name, "Ts") == 0 && layer->period_slot == SIZE_MAX)))
+                layer->period_slot = slot;  /* a ShapeFilter's Ts_used (Ts adjusted) before Ts */
+            /* parameters only: the quantities that are one (impulse times, taps, mode frequencies) */
+            const int parameter = role == FMI2_PARAMETER_FIXED || role == FMI2_PARAMETER_TUNABLE;
+            const size_t length = parameter ? element_base(name) : 0;
             size_t k = 0;
             if (length > 0) {  /* the array this element belongs to: usually the last one */
                 if (last_array && layer->types[last_array] == (Fmi2Type)type && base_length[last_array] == length
@@ -152,8 +159,9 @@ static void free_layer(Fmi3Layer *layer) {
     free(layer->first), free(layer->slots), free(layer->types), free(layer);
 }
 
-static fmi3Instance instantiate(fmi3String name, fmi3String token, int model_exchange, fmi3Boolean logging_on,
-                                fmi3InstanceEnvironment environment, fmi3LogMessageCallback log, const char *function) {
+static fmi3Instance instantiate(fmi3String name, fmi3String token, int model_exchange, int event_mode_used,
+                                fmi3Boolean logging_on, fmi3InstanceEnvironment environment, fmi3LogMessageCallback log,
+                                const char *function) {
     Fmi2ModelInfo info;
     model_describe(&info);
     const char *why = NULL;
@@ -161,6 +169,9 @@ static fmi3Instance instantiate(fmi3String name, fmi3String token, int model_exc
     else if (token == NULL || strcmp(token, info.guid) != 0)
         why = "instantiationToken does not match the one in this FMU's modelDescription.xml";
     else if (model_exchange && !info.model_exchange) why = "this FMU declares no Model Exchange";
+    else if (!model_exchange && fmi3_clocked() && !event_mode_used)
+        why = "this FMU takes its samples at the ticks of its input clock 'sample' (built with --clock): instantiate it "
+              "with eventModeUsed = fmi3True and tick the clock in Event Mode, or use the FMU built without --clock";
     Fmi3Layer *layer = why == NULL ? calloc(1, sizeof(Fmi3Layer)) : NULL;
     if (why == NULL && layer == NULL) why = "out of memory";
     Fmi2Instance *inst = NULL;
@@ -173,6 +184,11 @@ static fmi3Instance instantiate(fmi3String name, fmi3String token, int model_exc
             free_layer(layer);
             inst = NULL;
             why = "out of memory";
+        } else if (fmi3_clocked() && layer->period_slot == SIZE_MAX) {
+            fmu_mark_freed(inst), core_free(inst), free(inst);
+            free_layer(layer);
+            inst = NULL;
+            why = "this FMU declares a clock but has no sample period Ts";
         }
     }
     if (why != NULL && log != NULL) {
@@ -187,7 +203,7 @@ fmi3Instance fmi3InstantiateModelExchange(fmi3String instanceName, fmi3String in
                                           fmi3String resourcePath, fmi3Boolean visible, fmi3Boolean loggingOn,
                                           fmi3InstanceEnvironment instanceEnvironment, fmi3LogMessageCallback logMessage) {
     (void)resourcePath, (void)visible;
-    return instantiate(instanceName, instantiationToken, 1, loggingOn, instanceEnvironment, logMessage,
+    return instantiate(instanceName, instantiationToken, 1, 0, loggingOn, instanceEnvironment, logMessage,
                        "fmi3InstantiateModelExchange");
 }
 
@@ -196,10 +212,11 @@ fmi3Instance fmi3InstantiateCoSimulation(fmi3String instanceName, fmi3String ins
                                          fmi3Boolean earlyReturnAllowed, const fmi3ValueReference requiredIntermediateVariables[],
                                          size_t nRequiredIntermediateVariables, fmi3InstanceEnvironment instanceEnvironment,
                                          fmi3LogMessageCallback logMessage, fmi3IntermediateUpdateCallback intermediateUpdate) {
-    /* hasEventMode="false", no early return, no intermediate variables: the requests are ignored. */
-    (void)resourcePath, (void)visible, (void)eventModeUsed, (void)earlyReturnAllowed;
+    /* No early return, no intermediate variables: those requests are ignored; Event Mode is used only by
+     * an FMU built with --clock (hasEventMode="true"), which needs it. */
+    (void)resourcePath, (void)visible, (void)earlyReturnAllowed;
     (void)requiredIntermediateVariables, (void)nRequiredIntermediateVariables, (void)intermediateUpdate;
-    return instantiate(instanceName, instantiationToken, 0, loggingOn, instanceEnvironment, logMessage,
+    return instantiate(instanceName, instantiationToken, 0, eventModeUsed, loggingOn, instanceEnvironment, logMessage,
                        "fmi3InstantiateCoSimulation");
 }
 
@@ -249,7 +266,8 @@ fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean tolera
 
 fmi3Status fmi3ExitInitializationMode(fmi3Instance instance) {
     ENTER(instance, FMI2_INITIALIZATION, "fmi3ExitInitializationMode");
-    return (fmi3Status)core_exit_initialization(inst);
+    if (core_exit_initialization(inst) != fmi2OK) return fmi3Error;
+    return fmi3_clock_start(inst, layer_of(inst)->period_slot, "fmi3ExitInitializationMode");
 }
 
 fmi3Status fmi3Terminate(fmi3Instance instance) {
@@ -359,6 +377,7 @@ fmi3Status fmi3SetString(fmi3Instance instance, const fmi3ValueReference vr[], s
 fmi3Status fmi3EnterStepMode(fmi3Instance instance) {
     ENTER(instance, FMI2_EVENT_MODE | FMI2_STEP_COMPLETE, "fmi3EnterStepMode");
     if (inst->model_exchange) return FAIL("fmi3EnterStepMode: only for Co-Simulation instances");
+    if (fmi3_clock_before_step_mode(inst) != fmi3OK) return fmi3Error;
     inst->mode = FMI2_STEP_COMPLETE;
     return fmi3OK;
 }
@@ -372,6 +391,8 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoi
         return FAIL("fmi3DoStep: NULL eventHandlingNeeded, terminateSimulation, earlyReturn or lastSuccessfulTime");
     *eventHandlingNeeded = *terminateSimulation = *earlyReturn = fmi3False;
     *lastSuccessfulTime = inst->time;
+    if (!inst->model_exchange && fmi3_clock_before_step(inst, currentCommunicationPoint, communicationStepSize) != fmi3OK)
+        return fmi3Error;
     if (core_do_step(inst, currentCommunicationPoint, communicationStepSize, "fmi3DoStep") != fmi2OK) return fmi3Error;
     *lastSuccessfulTime = inst->time;
     return fmi3OK;

@@ -5,7 +5,7 @@
  * Value references. FMI 3.0 numbers variables, not values, and has arrays; the contract
  * (fmi2_model.h) numbers values ("slots"). The layer lists the contract's variables by slot, Real,
  * Integer, Boolean, String, and makes one FMI 3.0 variable of each, except that the elements
- * base[1], base[2], ... of one type become the array variable base (in the order they come, even when
+ * base[1], base[2], ... of a parameter of one type become the array parameter base (in the order they come, even when
  * another array's elements come between them, as a Shaper's f[i] and zeta[i] do). Value reference 0 is
  * time, the independent variable; the k-th variable of that list has value reference k. A model
  * part's own "time" slot (the plants keep time in slot 0) is time, not another variable.
@@ -24,6 +24,7 @@ typedef struct {
     size_t *first;        /* n_variables + 1 offsets into slots: variable k's elements are */
     size_t *slots;        /* slots[first[k - 1] .. first[k] - 1] */
     Fmi2Type *types;      /* of each variable */
+    size_t period_slot;   /* the sample period's slot (Ts_used, else Ts), for the clock; SIZE_MAX: none */
 } Fmi3Layer;
 
 #define ENTER(instance, allowed, function) GUARD(instance, allowed, function, fmi3Error)
@@ -35,5 +36,13 @@ static inline Fmi3Layer *layer_of(const Fmi2Instance *inst) { return (Fmi3Layer 
 /* The slot of scalar variable vr of the given type; logs and returns 0 if vr is none (or time, or
  * an array). */
 int fmi3_scalar_slot(Fmi2Instance *inst, fmi3ValueReference vr, Fmi2Type type, size_t *slot, const char *function);
+
+/* The input clock (fmi3_layer_clock.c): whether this build has one; its checks at the exit of
+ * initialisation (Ts is the declared interval; then Event Mode, the tick at t0), before a step and
+ * before the return to Step Mode (the tick the FMU stands on was taken). */
+int fmi3_clocked(void);
+fmi3Status fmi3_clock_start(Fmi2Instance *inst, size_t period_slot, const char *function);
+fmi3Status fmi3_clock_before_step(Fmi2Instance *inst, double t, double h);
+fmi3Status fmi3_clock_before_step_mode(Fmi2Instance *inst);
 
 #endif

@@ -4,8 +4,7 @@
  * As in the FMI 2.0 layer (fmi2_layer_me.c), the core (layer_core.c, layer_state.c) does the work:
  * the models have no event indicators, no time events and no discrete states, so an event iteration
  * ends at once. Not provided, each logging why and returning fmi3Error: variables of other types than
- * Float64, Int32, Boolean and String (an empty request is fine), clocks and their intervals and shifts,
- * configuration mode, adjoint derivatives, model partitions, output derivatives and the dependency
+ * Float64, Int32, Boolean and String (an empty request is fine), configuration mode, adjoint derivatives, model partitions, output derivatives and the dependency
  * queries (the ModelStructure of modelDescription.xml lists the dependencies).
  */
 #include "fmi3_layer.h"
@@ -17,7 +16,9 @@
 
 fmi3Status fmi3EnterEventMode(fmi3Instance instance) {
     ENTER(instance, FMI2_EVENT_MODE | FMI2_CONTINUOUS_TIME | FMI2_STEP_COMPLETE, "fmi3EnterEventMode");
-    if (!inst->model_exchange) return FAIL("fmi3EnterEventMode: this Co-Simulation FMU has no event mode (hasEventMode=\"false\")");
+    if (!inst->model_exchange && !fmi3_clocked())
+        return FAIL("fmi3EnterEventMode: this Co-Simulation FMU has no event mode (hasEventMode=\"false\"; build it "
+                    "with --clock for one)");
     inst->mode = FMI2_EVENT_MODE;
     return fmi3OK;
 }
@@ -208,10 +209,6 @@ fmi3Status fmi3SetBinary(fmi3Instance instance, const fmi3ValueReference vr[], s
         __VA_ARGS__;                                                                                \
         return FAIL(#function ": not provided by this FMU");                                        \
     }
-fmi3Status fmi3GetClock(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, fmi3Clock values[])
-    REFUSE(fmi3GetClock, (void)vr, (void)nvr, (void)values)
-fmi3Status fmi3SetClock(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, const fmi3Clock values[])
-    REFUSE(fmi3SetClock, (void)vr, (void)nvr, (void)values)
 fmi3Status fmi3GetNumberOfVariableDependencies(fmi3Instance instance, fmi3ValueReference vr, size_t *n)
     REFUSE(fmi3GetNumberOfVariableDependencies, (void)vr, (void)n)
 fmi3Status fmi3GetVariableDependencies(fmi3Instance instance, fmi3ValueReference dependent, size_t a[], fmi3ValueReference b[],
@@ -222,26 +219,6 @@ fmi3Status fmi3GetAdjointDerivative(fmi3Instance instance, const fmi3ValueRefere
     REFUSE(fmi3GetAdjointDerivative, (void)u, (void)nu, (void)k, (void)nk, (void)seed, (void)ns, (void)s, (void)n)
 fmi3Status fmi3EnterConfigurationMode(fmi3Instance instance) REFUSE(fmi3EnterConfigurationMode, (void)0)
 fmi3Status fmi3ExitConfigurationMode(fmi3Instance instance) REFUSE(fmi3ExitConfigurationMode, (void)0)
-fmi3Status fmi3GetIntervalDecimal(fmi3Instance instance, const fmi3ValueReference vr[], size_t n, fmi3Float64 i[],
-                                  fmi3IntervalQualifier q[])
-    REFUSE(fmi3GetIntervalDecimal, (void)vr, (void)n, (void)i, (void)q)
-fmi3Status fmi3GetIntervalFraction(fmi3Instance instance, const fmi3ValueReference vr[], size_t n, fmi3UInt64 c[], fmi3UInt64 r[],
-                                   fmi3IntervalQualifier q[])
-    REFUSE(fmi3GetIntervalFraction, (void)vr, (void)n, (void)c, (void)r, (void)q)
-fmi3Status fmi3GetShiftDecimal(fmi3Instance instance, const fmi3ValueReference vr[], size_t n, fmi3Float64 s[])
-    REFUSE(fmi3GetShiftDecimal, (void)vr, (void)n, (void)s)
-fmi3Status fmi3GetShiftFraction(fmi3Instance instance, const fmi3ValueReference vr[], size_t n, fmi3UInt64 c[], fmi3UInt64 r[])
-    REFUSE(fmi3GetShiftFraction, (void)vr, (void)n, (void)c, (void)r)
-fmi3Status fmi3SetIntervalDecimal(fmi3Instance instance, const fmi3ValueReference vr[], size_t n, const fmi3Float64 i[])
-    REFUSE(fmi3SetIntervalDecimal, (void)vr, (void)n, (void)i)
-fmi3Status fmi3SetIntervalFraction(fmi3Instance instance, const fmi3ValueReference vr[], size_t n, const fmi3UInt64 c[],
-                                   const fmi3UInt64 r[])
-    REFUSE(fmi3SetIntervalFraction, (void)vr, (void)n, (void)c, (void)r)
-fmi3Status fmi3SetShiftDecimal(fmi3Instance instance, const fmi3ValueReference vr[], size_t n, const fmi3Float64 s[])
-    REFUSE(fmi3SetShiftDecimal, (void)vr, (void)n, (void)s)
-fmi3Status fmi3SetShiftFraction(fmi3Instance instance, const fmi3ValueReference vr[], size_t n, const fmi3UInt64 c[],
-                                const fmi3UInt64 r[])
-    REFUSE(fmi3SetShiftFraction, (void)vr, (void)n, (void)c, (void)r)
 fmi3Status fmi3ActivateModelPartition(fmi3Instance instance, fmi3ValueReference clockReference, fmi3Float64 activationTime)
     REFUSE(fmi3ActivateModelPartition, (void)clockReference, (void)activationTime)
 fmi3Status fmi3GetOutputDerivatives(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, const fmi3Int32 orders[],

@@ -118,12 +118,13 @@ fmi2Status core_setup(Fmi2Instance *inst, double start_time, int stop_time_defin
 
 fmi2Status core_exit_initialization(Fmi2Instance *inst) {
     if (model_exit_initialization(inst) != fmi2OK) return fmi2Error;
+    inst->clock_ticks = 0.0;
     inst->mode = inst->model_exchange ? FMI2_EVENT_MODE : FMI2_STEP_COMPLETE;
     return fmi2OK;
 }
 
 void core_reset(Fmi2Instance *inst) {
-    inst->time = inst->start_time = 0.0;
+    inst->time = inst->start_time = inst->clock_ticks = 0.0;
     model_reset(inst);
     inst->mode = FMI2_INSTANTIATED;
 }

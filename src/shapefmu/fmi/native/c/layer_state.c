@@ -20,7 +20,7 @@
 typedef struct {
     unsigned long long magic, identity;
     Fmi2Mode mode;
-    double time, start_time;
+    double time, start_time, clock_ticks;
     double *reals;
     int *integers, *booleans;
     char *strings;
@@ -51,8 +51,9 @@ static int ours(const Fmi2Instance *inst, const void *state) {
 static fmi2Status check_values(Fmi2Instance *inst, const Snapshot *s, const char *function) {
     const Fmi2ModelInfo *info = &inst->info;
     const char *name;
-    if (!isfinite(s->time) || !isfinite(s->start_time))
-        return fmi2_fail(inst, "%s: the state's time is not finite", function);
+    if (!isfinite(s->time) || !isfinite(s->start_time) || !(s->clock_ticks >= 0.0 && s->clock_ticks <= 9e15)
+        || s->clock_ticks != floor(s->clock_ticks))
+        return fmi2_fail(inst, "%s: the state's time or clock tick count is not valid", function);
     for (size_t vr = 0; vr < info->n_real; vr++)
         if (model_variable(inst, FMI2_REAL, vr, &name) != FMI2_NO_VARIABLE
             && model_check_real(inst, vr, s->reals[vr], function) != fmi2OK)
@@ -125,6 +126,7 @@ fmi2Status core_get_state(Fmi2Instance *inst, void **FMUstate, const char *funct
     s->mode = inst->mode;
     s->time = inst->time;
     s->start_time = inst->start_time;
+    s->clock_ticks = inst->clock_ticks;
     copy_values(inst, s->reals, s->integers, s->booleans, s->strings, inst->reals, inst->integers, inst->booleans,
                 inst->strings);
     model_save_state(inst, s->model);
@@ -142,6 +144,7 @@ fmi2Status core_set_state(Fmi2Instance *inst, const void *FMUstate, const char *
                 s->strings);
     inst->time = s->time;
     inst->start_time = s->start_time;
+    inst->clock_ticks = s->clock_ticks;
     inst->mode = s->mode;
     if (model_restore_state(inst, s->model, s->model_size) != 0)
         return fmi2_fail(inst, "%s: the state does not fit this instance's model data", function);
@@ -159,12 +162,12 @@ fmi2Status core_free_state(Fmi2Instance *inst, void **FMUstate, const char *func
 }
 
 /* Serialised layout: a header of 8 uint64 (magic, identity, the four counts, mode, model bytes), the
- * time and the start time, then the Real, Integer, Boolean and String values and the model bytes. */
+ * time, the start time and the clock ticks, then the Real, Integer, Boolean and String values and the model bytes. */
 enum { HEADER_WORDS = 8 };
 
 static size_t serial_size(const Fmi2Instance *inst, size_t model_size) {
     const Fmi2ModelInfo *info = &inst->info;
-    return HEADER_WORDS * sizeof(unsigned long long) + (2 + info->n_real) * sizeof(double)
+    return HEADER_WORDS * sizeof(unsigned long long) + (3 + info->n_real) * sizeof(double)
            + (info->n_integer + info->n_boolean) * sizeof(int) + string_bytes(inst) + model_size;
 }
 
@@ -198,7 +201,7 @@ fmi2Status core_serialize(Fmi2Instance *inst, const void *FMUstate, unsigned cha
     const unsigned long long header[HEADER_WORDS] = {SERIAL_MAGIC, identity(inst), info->n_real, info->n_integer,
                                                      info->n_boolean, info->n_string, (unsigned long long)s->mode,
                                                      s->model_size};
-    const double times[2] = {s->time, s->start_time};
+    const double times[3] = {s->time, s->start_time, s->clock_ticks};
     unsigned char *p = put((unsigned char *)serializedState, header, sizeof header);
     p = put(p, times, sizeof times);
     p = put(p, s->reals, info->n_real * sizeof(double));
@@ -231,11 +234,12 @@ fmi2Status core_deserialize(Fmi2Instance *inst, const unsigned char serializedSt
                          serial_size(inst, model_size));
     Snapshot *s = writable(inst, FMUstate, model_size);
     if (s == NULL) return fmi2_fail(inst, "%s: out of memory", function);
-    double times[2];
+    double times[3];
     s->mode = (Fmi2Mode)header[6];
     p = take(times, p, sizeof times);
     s->time = times[0];
     s->start_time = times[1];
+    s->clock_ticks = times[2];
     p = take(s->reals, p, info->n_real * sizeof(double));
     p = take(s->integers, p, info->n_integer * sizeof(int));
     p = take(s->booleans, p, info->n_boolean * sizeof(int));
