@@ -12,6 +12,9 @@ provisional, ``("RESET_IN_SETUP",)`` resets every value in fmi2SetupExperiment; 
 only the parameters and the outputs that need no input, as a source such as the Reference FMU Stair;
 ``dependencies=False`` leaves the ``dependencies`` attribute out of the ModelStructure, as pythonfmu
 and the Reference FMUs do; ``missing_library`` links the binary against a library the FMU does not ship.
+
+``build_array_gain3(directory)`` builds tests/fmus_c/array_gain3.c, an FMI 3.0 Co-Simulation FMU with
+1-D array variables (Float64 and Int32; the C file lists them).
 """
 
 from __future__ import annotations
@@ -27,6 +30,7 @@ import fmpy
 HERE = Path(__file__).resolve().parent / "fmus_c"
 GUID = "{6f1c2b7e-typed-stair-0001}"
 TOKEN3 = "{6f1c2b7e-typed-stair-0003}"
+TOKEN_ARRAYS = "{6f1c2b7e-array-gain-0003}"
 
 # (name, FMI 2.0 type, value reference, causality, variability, start, inputs it depends on); the
 # ModelVariables list in this order (the indices of the FMI 2.0 ModelStructure are positions in it).
@@ -183,8 +187,10 @@ def typed_stair3_description(identifier: str, *, source: bool = False, dependenc
 
 
 def compile_fmu(c_file: Path, description: str, identifier: str, out: Path, include: Path, platform: str,
-                defines: tuple[str, ...] = (), libraries: tuple[str, ...] = ()) -> Path:
-    """Compile ``c_file`` into binaries/<platform>/<identifier>.so and zip it with ``description``."""
+                defines: tuple[str, ...] = (), libraries: tuple[str, ...] = (),
+                headers: tuple[str, ...] = ("typed_stair_model.h",)) -> Path:
+    """Compile ``c_file`` into binaries/<platform>/<identifier>.so and zip it with ``description``
+    and its sources (``c_file`` and the ``headers`` of tests/fmus_c it includes)."""
     out.parent.mkdir(parents=True, exist_ok=True)
     binary = out.with_suffix(".so")
     subprocess.run(["gcc", "-O2", "-shared", "-fPIC", "-std=c99", "-Wall", "-Werror", "-I", str(include), "-I", str(HERE),
@@ -193,7 +199,7 @@ def compile_fmu(c_file: Path, description: str, identifier: str, out: Path, incl
     with zipfile.ZipFile(out, "w", zipfile.ZIP_DEFLATED) as archive:
         archive.writestr("modelDescription.xml", description)
         archive.write(binary, f"binaries/{platform}/{identifier}{fmpy.sharedLibraryExtension}")
-        for source in (c_file, HERE / "typed_stair_model.h"):
+        for source in (c_file, *(HERE / header for header in headers)):
             archive.write(source, f"sources/{source.name}")
     binary.unlink()
     return out
@@ -225,3 +231,38 @@ def build_typed_stair3(directory: Path, identifier: str = "TypedStair3", *, quir
     return compile_fmu(HERE / "typed_stair3.c", typed_stair3_description(identifier, source=source, dependencies=dependencies),
                        identifier, Path(directory) / f"{identifier}.fmu", include, fmpy.platform_tuple,
                        tuple(f"QUIRK_{q}" for q in quirks))
+
+
+ARRAY_GAIN3_DESCRIPTION = f"""<?xml version="1.0" encoding="UTF-8"?>
+<fmiModelDescription fmiVersion="3.0" modelName="ArrayGain3" instantiationToken="{TOKEN_ARRAYS}"
+    generationTool="shapefmu tests" variableNamingConvention="structured">
+  <CoSimulation modelIdentifier="ArrayGain3" canHandleVariableCommunicationStepSize="true" hasEventMode="false"/>
+  <ModelVariables>
+    <Float64 name="time" valueReference="0" causality="independent" variability="continuous"/>
+    <Float64 name="u" valueReference="1" causality="input" start="1 2 3"><Dimension start="3"/></Float64>
+    <Float64 name="k" valueReference="2" causality="parameter" variability="tunable" start="1 1 1"><Dimension start="3"/></Float64>
+    <Float64 name="s" valueReference="3" causality="input" start="0"/>
+    <Float64 name="y" valueReference="4" causality="output"><Dimension start="3"/></Float64>
+    <Float64 name="total" valueReference="5" causality="output"/>
+    <Float64 name="x" valueReference="6" causality="output" initial="exact" start="0 0 0"><Dimension start="3"/></Float64>
+    <Int32 name="m" valueReference="7" causality="input" variability="discrete" start="0 0"><Dimension start="2"/></Int32>
+    <Int32 name="m2" valueReference="8" causality="output" variability="discrete"><Dimension start="2"/></Int32>
+  </ModelVariables>
+  <ModelStructure>
+    <Output valueReference="4" dependencies="1"/>
+    <Output valueReference="5" dependencies="1 3"/>
+    <Output valueReference="6" dependencies=""/>
+    <Output valueReference="8" dependencies="7"/>
+    <InitialUnknown valueReference="4" dependencies="1"/>
+    <InitialUnknown valueReference="5" dependencies="1 3"/>
+    <InitialUnknown valueReference="8" dependencies="7"/>
+  </ModelStructure>
+</fmiModelDescription>
+"""
+
+
+def build_array_gain3(directory: Path) -> Path:
+    """The ArrayGain3 FMU (FMI 3.0 Co-Simulation with array variables, tests/fmus_c/array_gain3.c) in ``directory``."""
+    include = Path(str(resources.files("shapefmu.fmi.native") / "c"))
+    return compile_fmu(HERE / "array_gain3.c", ARRAY_GAIN3_DESCRIPTION, "ArrayGain3", Path(directory) / "ArrayGain3.fmu",
+                       include, fmpy.platform_tuple, headers=())

@@ -67,7 +67,7 @@ def _cmd_simulate(args) -> int:
         name, equals, value = item.partition("=")
         if not equals:
             raise ValueError(f"--set must be component.variable=VALUE, got {item!r}")
-        parameters[name] = value  # typed by the model description: a number, true/false, an item, text
+        parameters[name] = value  # typed by the model description: a number, true/false, an item, text, [array]
     system = _system(args.system)
     _write_ssp(system, args, parameters)
     master = None
@@ -190,12 +190,14 @@ def register(commands) -> None:
     p.add_argument("system", help="SSP system (.ssp archive or .ssd file), or a shipped one by name (shapefmu plant list)")
     p.add_argument("--stop", type=float, required=True, help="stop time in s")
     p.add_argument("--step", type=float, required=True, help="macro (communication) step in s")
-    p.add_argument("--record", action="append", metavar="COMP.VAR", help="variable to record; repeat (default: every output)")
+    p.add_argument("--record", action="append", metavar="COMP.VAR",
+                   help="variable to record, an array as a column per element; repeat (default: every output)")
     p.add_argument("--output-interval", type=float, help="record every this many s (a multiple of --step)")
     p.add_argument("--algorithm", choices=("gauss-seidel", "jacobi"), default="gauss-seidel", help="master algorithm")
     p.add_argument("--model-exchange", action="append", metavar="COMP", help="integrate this component as Model Exchange")
     p.add_argument("--set", action="append", default=[], metavar="COMP.VAR=VALUE",
-                   help="parameter for this run, typed by the FMU (a number, true/false, an enumeration item, text); repeat")
+                   help="parameter for this run, typed by the FMU (a number, true/false, an enumeration item, text; "
+                        "an FMI 3.0 array whole as [V1,V2,...] or one element as COMP.VAR[I]=VALUE, I from 1); repeat")
     p.add_argument("--out", metavar="FILE", type=output_file(".csv", ".parquet", what="results file"),
                    help="save the results as .csv or .parquet (checked before the run)")
     p.add_argument("--plot", metavar="PNG", type=output_file("plot"), help="plot every recorded variable against time")

@@ -39,6 +39,12 @@ Communication semantics (``t_k = t0 + k*h``; the last step is shortened to end e
   String, Enumeration; see :mod:`.types`); parameters are typed by the model description, so the
   text of a command line (``"zvd"``, ``"true"``, an Enumeration item) sets them. Results have a
   typed column per recorded variable.
+* FMI 3.0 arrays (1-D) travel element by element: a connection of two arrays of one size joins
+  element i to element i, and ``name[i]`` (1-based) names one element, which connects to a scalar or
+  another element (:mod:`shapefmu.fmi.ssp_connectors`). A parameter sets a whole array from a
+  sequence or the text ``"[1, 2, 3]"`` of the array's size, or one element as ``"comp.k[2]"``; the
+  other elements keep their start values (or the SSP bindings' values). A recorded array has a
+  column per element, ``comp.y[1]`` ... ``comp.y[n]``.
 * An FMU may ask to end the simulation (FMI 2.0 Co-Simulation: fmi2Discard and fmi2Terminated;
   FMI 3.0: terminateSimulation; Model Exchange: terminateSimulation at an event). That is a normal
   end: the other components finish the macro step, the row at the requested time is recorded and
@@ -51,6 +57,7 @@ functions on preallocated ctypes arrays (:mod:`.step_program`, :mod:`.units`).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import shutil
 import sys
@@ -62,7 +69,7 @@ import numpy as np
 from shapefmu.cosim import step_program
 from shapefmu.cosim.errors import AlgebraicLoopError, CosimError, CosimInterrupted, Termination
 from shapefmu.cosim.graph import Stage, _feeds_through, output_dependencies, schedule
-from shapefmu.cosim.types import enumeration_items, kind_of, typed_value
+from shapefmu.cosim.types import array_size, array_values, enumeration_items, kind_of, typed_value
 from shapefmu.cosim.loading import load_units
 from shapefmu.cosim.units import FMUFailure
 from shapefmu.fmi.ssp import System, read_ssp
@@ -88,7 +95,8 @@ class Master:
     step : float
         Macro (communication) step in s.
     algorithm : "gauss-seidel" | "jacobi"
-    record : list of "component.variable", default every scalar output of every component.
+    record : list of "component.variable", default every output of every component; an array (1-D)
+        is recorded as a column per element, ``component.y[1]`` ... (``record`` then lists the columns).
     output_interval : float, default ``step``; must be a whole multiple of ``step``.
     step_multiples : {"component": m}, m >= 1: that component steps by ``m*step``.
     model_exchange : components to run through their Model Exchange interface.
@@ -176,44 +184,58 @@ class Master:
         system = self.system
         if record is None:
             record = [f"{u.name}.{v.name}" for u in self.units for v in u.description.modelVariables
-                      if v.causality == "output" and kind_of(v) and not getattr(v, "shape", None)]
-        self.record = list(record)
+                      if v.causality == "output" and kind_of(v) and len(v.shape) <= 1]
+        # The connections between whole variables (an array element's is its array's): what the
+        # units move, and what the stepping order and loops are found on.
+        links = [dataclasses.replace(c, start_connector=self._unit[c.start_component].elements(c.start_connector)[0],
+                                     end_connector=self._unit[c.end_component].elements(c.end_connector)[0])
+                 for c in system.connections]
         inputs = {u.name: [] for u in self.units}
         reads = {u.name: [] for u in self.units}
-        for c in system.connections:
-            inputs[c.end_component].append(c.end_connector)
-            if c.start_connector not in reads[c.start_component]:
-                reads[c.start_component].append(c.start_connector)
+        for c in links:
+            for names, variable in ((inputs[c.end_component], c.end_connector), (reads[c.start_component], c.start_connector)):
+                if variable not in names:
+                    names.append(variable)
         references = []
-        for reference in self.record:
+        for reference in record:
             component, variable = _split(reference, "record entry")
             if component not in self._unit:
                 raise ValueError(f"record entry {reference!r} names unknown component {component!r}")
-            self._unit[component].variable(variable)
-            if variable not in reads[component]:
-                reads[component].append(variable)
+            name, _ = self._unit[component].elements(variable)
+            if name not in reads[component]:
+                reads[component].append(name)
             references.append((component, variable))
         for unit in self.units:
             unit.configure(inputs[unit.name], reads[unit.name])
-        # (component, family, slot) of each recorded variable in its unit's read arrays
-        self._record_sources = [(c, *self._unit[c].read_slot[v]) for c, v in references]
-        # ops[name]: how each floating-point input of that component is computed from an output
-        # slot (the fast path, also used by loops); typed_ops: every other family.
+        # A column per recorded scalar: (component, family, slot) in its unit's read arrays.
+        self.record, self._record_sources = [], []
+        for component, variable in references:
+            unit = self._unit[component]
+            name, indices = unit.elements(variable)
+            family, slots = unit.slots(variable, inputs=False)
+            whole = variable == name and array_size(unit.variables[name]) is not None
+            for i, slot in zip(indices, slots):
+                self.record.append(f"{component}.{name}[{i + 1}]" if whole else f"{component}.{variable}")
+                self._record_sources.append((component, family, slot))
+        # ops[name]: how each floating-point input value of that component is computed from an
+        # output value (the fast path, also used by loops); typed_ops: every other family. A
+        # connection of arrays is one op per element.
         self._ops = {u.name: [] for u in self.units}
         self._typed_ops = {u.name: [] for u in self.units}
         for c in system.connections:
             source, target = self._unit[c.start_component], self._unit[c.end_component]
-            f, d = target.input_slot[c.end_connector]
-            g, s = source.read_slot[c.start_connector]
-            if f == target.real and g == source.real:
-                self._ops[target.name].append((d, source, s, c.factor, c.offset))
-            else:
-                self._typed_ops[target.name].append((f, d, source, g, s, c.factor, c.offset))
+            f, ds = target.slots(c.end_connector, inputs=True)
+            g, ss = source.slots(c.start_connector, inputs=False)
+            for d, s in zip(ds, ss):  # of one size: System.validate refused others
+                if f == target.real and g == source.real:
+                    self._ops[target.name].append((d, source, s, c.factor, c.offset))
+                else:
+                    self._typed_ops[target.name].append((f, d, source, g, s, c.factor, c.offset))
         if self.algorithm == "jacobi":
             self.stages = [Stage([u.name]) for u in self.units]
         else:
             dependencies = {u.name: output_dependencies(u.description) for u in self.units}
-            self.stages = schedule(list(system.components), system.connections, dependencies)
+            self.stages = schedule(list(system.components), links, dependencies)
             for stage in self.stages:
                 if stage.is_loop:
                     stuck = [n for n in stage.components if not self._unit[n].can_roll_back]
@@ -237,8 +259,8 @@ class Master:
                 early = {}
                 for name in reads[unit.name]:
                     if name in dependencies and _feeds_through(dependencies, name):
-                        f, s = unit.read_slot[name]
-                        early.setdefault(f, set()).add(s)
+                        f, slots = unit.slots(name, inputs=False)
+                        early.setdefault(f, set()).update(slots)
                 if early:
                     self._early[unit.name] = {f: (slots, (unit.channels[f].family.ctype * unit.channels[f].n_out)())
                                               for f, slots in early.items()}
@@ -253,18 +275,19 @@ class Master:
                 + self._typed_ops[name])
 
     def _tears(self, stage):
-        """For each torn input: (unit, input index, source unit, source slot, factor, offset)."""
+        """For each torn input value (every connected element of a torn array): (unit, input index,
+        source unit, source slot, factor, offset)."""
         slots = []
-        for component, connector in stage.tears:
+        for component, connector in dict.fromkeys(stage.tears):  # an array fed by two connections is torn once
             unit = self._unit[component]
-            family, d = unit.input_slot[connector]
+            family, values = unit.slots(connector, inputs=True)
             if family != unit.real:
                 raise AlgebraicLoopError(f"algebraic loop through {', '.join(stage.loop_variables)}: the master iterates "
                                          f"on floating-point inputs only, and {component}.{connector} is {family}",
                                          stage.loop_variables)
             for index, source, s, f, o in self._ops[component]:
-                if index == d:
-                    slots.append((unit, d, source, s, f, o))
+                if index in values:
+                    slots.append((unit, index, source, s, f, o))
         return slots
 
     # ----------------------------------------------------------------------------- code generation
@@ -356,7 +379,11 @@ class Master:
         return buf[: self._row]
 
     def _record_row(self, t: float) -> tuple:
-        return (t, *(self._unit[c].value(self._unit[c].channels[f].out_names[s]) for c, f, s in self._record_sources))
+        row = [t]
+        for c, f, s in self._record_sources:
+            value = self._unit[c].channels[f].out_val[s]
+            row.append((value or b"").decode(errors="replace") if f == "String" else value)
+        return tuple(row)
 
     def _stop(self, row: int, buf: np.ndarray, k: int) -> int:
         """An FMU asked to end the simulation in macro step ``k``: record the row at the earliest
@@ -375,13 +402,19 @@ class Master:
             if component not in self._unit:
                 raise ValueError(f"parameter {reference!r} names unknown component {component!r}")
             unit = self._unit[component]
-            declared = unit.variable(variable)
+            name, indices = unit.elements(variable)
+            declared = unit.variables[name]
             kind = kind_of(declared)
             if kind is None:
                 raise ValueError(f"parameter {reference!r} has type {declared.type}, which cannot be set by value")
             # typed by the model description: "--set shaper.kind=zvd", "--set a.flag=true"
-            grouped[component][variable] = typed_value(value, kind, enumeration_items(unit.description, declared),
-                                                       f"parameter {reference}", declared.type)
+            items = enumeration_items(unit.description, declared)
+            if variable == name and array_size(declared) is not None:  # a whole array: its elements
+                for i, item in zip(indices, array_values(value, len(indices), f"parameter {reference}")):
+                    grouped[component][f"{name}[{i + 1}]"] = typed_value(item, kind, items, f"parameter {reference}[{i + 1}]",
+                                                                         declared.type)
+            else:
+                grouped[component][variable] = typed_value(value, kind, items, f"parameter {reference}", declared.type)
         return grouped
 
     def _error(self, failure: FMUFailure, t, partial) -> CosimError:

@@ -139,7 +139,8 @@ def python_chunk(master, blocks):
         env.update({f"c{i}": u.c, f"do{i}": u.do_step, f"ta{i}": u.time_arg, f"ha{i}": u.step_arg, f"unit{i}": u})
         for f, ch in u.channels.items():
             env.update({f"set{i}_{f}": ch.setter, f"get{i}_{f}": ch.getter, f"ivr{i}_{f}": ch.in_vr, f"iv{i}_{f}": ch.in_val,
-                        f"ovr{i}_{f}": ch.out_vr, f"ov{i}_{f}": ch.out_val, f"nin{i}_{f}": ch.n_in_arg, f"nout{i}_{f}": ch.n_out_arg})
+                        f"ovr{i}_{f}": ch.out_vr, f"ov{i}_{f}": ch.out_val, f"nin{i}_{f}": ch.n_in_arg, f"nout{i}_{f}": ch.n_out_arg,
+                        f"nvrin{i}_{f}": ch.nvr_in_arg, f"nvrout{i}_{f}": ch.nvr_out_arg})
         for f, (_, early) in master._early.get(u.name, {}).items():
             env[f"ev{i}_{f}"] = early
 
@@ -151,9 +152,11 @@ def python_chunk(master, blocks):
         if kind in ("set", "early", "read"):
             f = op[2]
             call = f"{unit.prefix}{'Set' if kind == 'set' else 'Get'}{f}"
-            arrays = {"set": (f"ivr{i}_{f}", f"nin{i}_{f}", f"iv{i}_{f}"), "early": (f"ovr{i}_{f}", f"nout{i}_{f}", f"ev{i}_{f}"),
-                      "read": (f"ovr{i}_{f}", f"nout{i}_{f}", f"ov{i}_{f}")}[kind]
-            extra = f", {arrays[1]}" if unit.fmi3 else ""
+            # value references, their number, the values; FMI 3.0 adds the number of values (nValues),
+            # more than the references' where an array contributes its elements
+            arrays = {"set": (f"ivr{i}_{f}", f"nvrin{i}_{f}", f"iv{i}_{f}"), "early": (f"ovr{i}_{f}", f"nvrout{i}_{f}", f"ev{i}_{f}"),
+                      "read": (f"ovr{i}_{f}", f"nvrout{i}_{f}", f"ov{i}_{f}")}[kind]
+            extra = (f", nin{i}_{f}" if kind == "set" else f", nout{i}_{f}") if unit.fmi3 else ""
             function = f"set{i}_{f}" if kind == "set" else f"get{i}_{f}"
             when = "t + dt" if kind == "read" else "t"
             return [f"if (status := {function}(c{i}, {', '.join(arrays)}{extra})) > 1: fail({i}, {call!r}, {when}, status)"]
@@ -239,7 +242,7 @@ def python_only_reason(master, blocks) -> str | None:
             if op[0] == "loop":
                 return f"the algebraic loop through {', '.join(master._loops[op[1]].loop_variables)} is solved in Python"
     for c in master.system.connections:
-        family = master._unit[c.end_component].input_slot[c.end_connector][0]
+        family = master._unit[c.end_component].slots(c.end_connector, inputs=True)[0]
         if master._unit[c.end_component].channels[family].family.c_type is None:
             return f"connection {c.start} -> {c.end} joins {family} variables, which the compiled loop does not move"
     for reference, (component, family, _) in zip(master.record, master._record_sources):
@@ -361,9 +364,10 @@ def _c_source(master, blocks, names, dtype) -> tuple[str, list[str]]:
         if kind in ("set", "early", "read"):
             f = op[2]
             ch = u.channels[f]
-            count = ch.n_in if kind == "set" else ch.n_out
-            arrays = {"set": f"ivr{i}_{f}, {count}, iv{i}_{f}", "early": f"ovr{i}_{f}, {count}, ev{i}_{f}",
-                      "read": f"ovr{i}_{f}, {count}, ov{i}_{f}"}[kind]
+            # nvr value references; FMI 3.0 adds nValues, an array's elements each (see .units)
+            nvr, count = (ch.nvr_in, ch.n_in) if kind == "set" else (ch.nvr_out, ch.n_out)
+            arrays = {"set": f"ivr{i}_{f}, {nvr}, iv{i}_{f}", "early": f"ovr{i}_{f}, {nvr}, ev{i}_{f}",
+                      "read": f"ovr{i}_{f}, {nvr}, ov{i}_{f}"}[kind]
             extra = f", {count}" if u.fmi3 else ""
             function = f"set{i}_{f}" if kind == "set" else f"get{i}_{f}"
             index = call_index(f"{u.prefix}{'Set' if kind == 'set' else 'Get'}{f}")

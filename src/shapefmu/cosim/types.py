@@ -16,9 +16,11 @@ from __future__ import annotations
 import ctypes
 from dataclasses import dataclass
 
-from shapefmu.fmi.variable_types import KIND, enumeration_items, kind_of, typed_value
+from shapefmu.fmi.variable_types import (KIND, array_size, array_values, enumeration_items, kind_of, split_element,
+                                         typed_value)
 
-__all__ = ["FAMILIES_2", "FAMILIES_3", "Family", "KIND", "enumeration_items", "family_of", "kind_of", "typed_value"]
+__all__ = ["FAMILIES_2", "FAMILIES_3", "Family", "KIND", "array_size", "array_values", "enumeration_items", "family_of",
+           "kind_of", "split_element", "typed_value"]
 
 
 @dataclass(frozen=True)

@@ -14,6 +14,12 @@ iteration (``fmi2NewDiscreteStates`` until no new discrete states are needed). I
 only at events (FMI 2.0 sec. 3.2.3, FMI 3.0 sec. 3.2.2): at a communication point where one of them
 changed, the master enters event mode, sets the inputs there and iterates the event, as fmpy does at
 the discontinuities of an input table; continuous inputs are set in continuous-time mode.
+
+FMI 3.0 arrays (1-D): a variable's value reference appears once in a batched call and its ``size``
+values lie consecutively in the value array, so ``nValues`` is the number of elements over all the
+value references, not their number (FMI 3.0's ``nValues`` argument). ``input_slot``/``read_slot`` give a
+variable's first value; :meth:`Unit.slots` the values a name (``y``, ``y[2]``) stands for. An array
+is set whole: values given for some of its elements set the others to their start values.
 """
 
 from __future__ import annotations
@@ -35,7 +41,8 @@ from fmpy.fmi2 import (
 )
 from fmpy.fmi1 import printLogMessage
 
-from shapefmu.cosim.types import FAMILIES_2, Family, enumeration_items, family_of, kind_of, typed_value
+from shapefmu.cosim.types import (FAMILIES_2, Family, array_size, array_values, enumeration_items, family_of, kind_of,
+                                  split_element, typed_value)
 
 STATUS_NAMES = {0: "fmi2OK", 1: "fmi2Warning", 2: "fmi2Discard", 3: "fmi2Error", 4: "fmi2Fatal", 5: "fmi2Pending"}
 
@@ -74,7 +81,10 @@ class FMUFailure(Exception):
 
 class Channel:
     """The batched value arrays of one family (see :mod:`.types`) in one unit: the inputs set before
-    each step and the variables read after it, with the raw FMI functions that move them."""
+    each step and the variables read after it, with the raw FMI functions that move them.
+
+    ``nvr_in``/``nvr_out`` count value references (one per variable), ``n_in``/``n_out`` values
+    (an array's elements each): the lengths of ``in_val``/``out_val``."""
 
     def __init__(self, family: Family):
         self.family = family
@@ -83,11 +93,14 @@ class Channel:
 
     def allocate(self, variables: dict, raw_function, fmi3: bool = False) -> None:
         element = self.family.ctype
-        self.n_in, self.n_out = len(self.in_names), len(self.out_names)
+        self.nvr_in, self.nvr_out = len(self.in_names), len(self.out_names)
+        self.n_in = sum(array_size(variables[n]) or 1 for n in self.in_names)
+        self.n_out = sum(array_size(variables[n]) or 1 for n in self.out_names)
+        self.nvr_in_arg, self.nvr_out_arg = c_size_t(self.nvr_in), c_size_t(self.nvr_out)
         self.n_in_arg, self.n_out_arg = c_size_t(self.n_in), c_size_t(self.n_out)
-        self.in_vr = (c_uint * max(1, self.n_in))(*[variables[n].valueReference for n in self.in_names])
+        self.in_vr = (c_uint * max(1, self.nvr_in))(*[variables[n].valueReference for n in self.in_names])
         self.in_val = (element * max(1, self.n_in))()
-        self.out_vr = (c_uint * max(1, self.n_out))(*[variables[n].valueReference for n in self.out_names])
+        self.out_vr = (c_uint * max(1, self.nvr_out))(*[variables[n].valueReference for n in self.out_names])
         self.out_val = (element * max(1, self.n_out))()
         self.setter = raw_function(f"Set{self.family.name}")
         self.getter = raw_function(f"Get{self.family.name}")
@@ -96,11 +109,11 @@ class Channel:
     def set(self, c) -> int:
         # FMI 3.0 setters and getters take the number of values after the array (nValues).
         extra = (self.n_in_arg,) if self.fmi3 else ()
-        return self.setter(c, self.in_vr, self.n_in_arg, self.in_val, *extra)
+        return self.setter(c, self.in_vr, self.nvr_in_arg, self.in_val, *extra)
 
     def get(self, c) -> int:
         extra = (self.n_out_arg,) if self.fmi3 else ()
-        return self.getter(c, self.out_vr, self.n_out_arg, self.out_val, *extra)
+        return self.getter(c, self.out_vr, self.nvr_out_arg, self.out_val, *extra)
 
 
 class Unit:
@@ -167,27 +180,51 @@ class Unit:
     def family(self, name: str) -> Family:
         """The family (see :mod:`.types`) that gets and sets variable ``name``."""
         variable = self.variable(name)
-        if getattr(variable, "shape", None):
-            raise ValueError(f"{self.name}.{name} is an array variable {variable.shape}; the master connects and "
-                             f"records scalar variables only")
+        if len(getattr(variable, "shape", None) or ()) > 1:
+            raise ValueError(f"{self.name}.{name} is an array variable of shape {variable.shape}; the master moves "
+                             f"scalars and 1-D arrays only")
         try:
             return family_of(variable, self.fmi3)
         except ValueError as error:
             raise ValueError(f"{self.name}.{error}") from None
 
+    def elements(self, reference: str) -> tuple[str, list[int]]:
+        """The variable ``reference`` names and the 0-based indices of the values it stands for:
+        every element of a whole array, ``[i - 1]`` for ``name[i]``, ``[0]`` for a scalar."""
+        if reference not in self.variables:
+            element = split_element(reference)
+            size = array_size(self.variables[element[0]]) if element and element[0] in self.variables else None
+            if size is None:
+                self.variable(reference)  # raises: no such variable
+            name, index = element
+            if index > size:
+                raise ValueError(f"{self.name}.{reference}: index {index} is beyond the {size} elements of "
+                                 f"{self.name}.{name}")
+            return name, [index - 1]
+        return reference, list(range(array_size(self.variables[reference]) or 1))
+
+    def slots(self, reference: str, inputs: bool) -> tuple[str, list[int]]:
+        """(family name, indices in its input or read values) of what ``reference`` names (configured)."""
+        name, indices = self.elements(reference)
+        family, first = (self.input_slot if inputs else self.read_slot)[name]
+        return family, [first + i for i in indices]
+
     def configure(self, inputs: list[str], reads: list[str]) -> None:
-        """Allocate the batched arrays: ``inputs`` set before each step, ``reads`` read after it,
-        one pair of arrays per family; ``slot[name]`` is (family name, index) in them."""
+        """Allocate the batched arrays: variables ``inputs`` set before each step, ``reads`` read
+        after it, one pair of arrays per family; ``slot[name]`` is (family name, index of its first
+        value) in them."""
         self.inputs, self.reads = list(inputs), list(reads)
         self.channels: dict[str, Channel] = {}
         self.input_slot, self.read_slot = {}, {}
+        filled: dict[tuple[str, str], int] = {}  # values allocated so far, by (family, direction)
         for names, slots, direction in ((inputs, self.input_slot, "in"), (reads, self.read_slot, "out")):
             for name in names:
                 family = self.family(name)
                 channel = self.channels.get(family.name) or self.channels.setdefault(family.name, Channel(family))
-                group = channel.in_names if direction == "in" else channel.out_names
-                slots[name] = (family.name, len(group))
-                group.append(name)
+                (channel.in_names if direction == "in" else channel.out_names).append(name)
+                first = filled.get((family.name, direction), 0)
+                slots[name] = (family.name, first)
+                filled[family.name, direction] = first + (array_size(self.variables[name]) or 1)
         self.channels.setdefault(self.real, Channel(self.family_table[self.real]))
         for channel in self.channels.values():
             channel.allocate(self.variables, self._raw_function, self.fmi3)
@@ -201,12 +238,6 @@ class Unit:
 
     def _raw_function(self, name: str):
         return _raw(self.fmu.dll, f"{self.prefix}{name}")
-
-    def value(self, name: str):
-        """The value of read variable ``name`` as last read (a Python value; strings decoded)."""
-        family, index = self.read_slot[name]
-        value = self.channels[family].out_val[index]
-        return (value or b"").decode(errors="replace") if family == "String" else value
 
     # ----------------------------------------------------------------------------- calls
     def check(self, status: int, call: str) -> None:
@@ -223,22 +254,58 @@ class Unit:
 
     def apply_values(self, values: dict) -> None:
         """Set start values/parameters by name, each with the setter of its type (Enumeration values
-        may be item names)."""
-        for name, value in values.items():
-            variable = self.variable(name)
-            family = self.family(name)
-            call = f"{self.prefix}Set{family.name}({name}={value!r})"
-            try:
-                value = typed_value(value, kind_of(variable), enumeration_items(self.description, variable),
-                                    f"{self.name}.{name}", variable.type)
-            except ValueError as error:
-                raise FMUFailure(self, call, str(error)) from None
-            array = (family.ctype * 1)(value.encode() if family.name == "String" else value)
-            setter = self._raw_function(f"Set{family.name}")
-            extra = (c_size_t(1),) if self.fmi3 else ()
-            status = setter(self.c, (c_uint * 1)(variable.valueReference), c_size_t(1), array, *extra)
-            if status > 1:
-                raise FMUFailure(self, call, status)
+        may be item names). An array's elements (``k[2]``) are set with the whole array, whose other
+        elements keep their start values; the input arrays' unconnected elements start from the
+        same values (their input slots are filled, as the step sets the whole array)."""
+        arrays: dict[str, dict[int, object]] = {}
+        for key, value in values.items():
+            name, indices = self.elements(key)
+            if array_size(self.variables[name]) is None:
+                self._set(name, [value], f"{name}={value!r}")
+                continue
+            given = array_values(value, len(indices), f"{self.name}.{key}") if key == name else [value]
+            arrays.setdefault(name, {}).update(zip(indices, given))
+        for name in dict.fromkeys([*arrays, *self.input_slot]):
+            if array_size(self.variables[name]) is None:
+                continue
+            whole = self._start_elements(name, arrays.get(name, {}))
+            if name in arrays:
+                self._set(name, whole, f"{name}={whole!r}")
+            if name in self.input_slot:
+                family, first = self.input_slot[name]
+                typed = self._typed(name, whole, f"{self.prefix}Set{family}({name})")
+                self.channels[family].in_val[first:first + len(typed)] = typed
+
+    def _start_elements(self, name: str, given: dict[int, object]) -> list:
+        """Every element of array ``name``: ``given[i]``, else the start value from the model description."""
+        variable = self.variables[name]
+        size = array_size(variable)
+        starts = (variable.start or "").split()
+        if len(given) < size and len(starts) != size:
+            raise FMUFailure(self, f"{self.prefix}Set{self.family(name).name}({name})",
+                             f"{self.name}.{name} has no start value for each of its {size} elements: set them all")
+        return [given[i] if i in given else starts[i] for i in range(size)]
+
+    def _typed(self, name: str, items: list, call: str) -> list:
+        """``items`` as values of variable ``name`` in its family's C element type (strings encoded)."""
+        variable, family = self.variables[name], self.family(name)
+        try:
+            typed = [typed_value(item, kind_of(variable), enumeration_items(self.description, variable),
+                                 f"{self.name}.{name}", variable.type) for item in items]
+        except ValueError as error:
+            raise FMUFailure(self, call, str(error)) from None
+        return [item.encode() for item in typed] if family.name == "String" else typed
+
+    def _set(self, name: str, items: list, shown: str) -> None:
+        """Set variable ``name`` (all its elements: ``items``) with one call of its family's setter."""
+        family = self.family(name)
+        call = f"{self.prefix}Set{family.name}({shown})"
+        array = (family.ctype * len(items))(*self._typed(name, items, call))
+        extra = (c_size_t(len(items)),) if self.fmi3 else ()
+        status = self._raw_function(f"Set{family.name}")(self.c, (c_uint * 1)(self.variables[name].valueReference),
+                                                         c_size_t(1), array, *extra)
+        if status > 1:
+            raise FMUFailure(self, call, status)
 
     def setup(self, start_time: float) -> None:
         self._call("fmi2SetupExperiment", self.fmu.setupExperiment, startTime=start_time)
@@ -353,11 +420,14 @@ class ModelExchangeUnit(Unit):
         self._continuous_inputs = []  # (channel, its continuous inputs' channel, their indices in it)
         self._discrete_inputs = []  # (channel, indices of its discrete inputs)
         for channel in self._setters:
-            continuous = [i for i, name in enumerate(channel.in_names) if self.variables[name].variability == "continuous"]
-            discrete = [i for i in range(channel.n_in) if i not in continuous]
+            continuous, discrete = [], []  # the values of each, by index in the channel's input values
+            for name in channel.in_names:
+                _, first = self.input_slot[name]
+                values = range(first, first + (array_size(self.variables[name]) or 1))
+                (continuous if self.variables[name].variability == "continuous" else discrete).extend(values)
             if continuous:
                 subset = Channel(channel.family)
-                subset.in_names = [channel.in_names[i] for i in continuous]
+                subset.in_names = [n for n in channel.in_names if self.variables[n].variability == "continuous"]
                 subset.allocate(self.variables, self._raw_function, self.fmi3)
                 self._continuous_inputs.append((channel, subset, continuous))
             if discrete:

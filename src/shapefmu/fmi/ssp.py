@@ -19,6 +19,8 @@ OSP's algorithm settings) are kept on read and written back, and otherwise ignor
 Errors name the file, the element and the name: an unknown component or connector, a connection
 whose types or causalities do not fit (output -> input only), an input connected twice, a missing
 FMU file.
+
+Connectors, FMI 3.0 array connectors and parameter values typed by connectors: :mod:`.ssp_connectors`.
 """
 
 from __future__ import annotations
@@ -34,9 +36,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from xml.etree import ElementTree as ET
 
-from shapefmu.fmi.archives import extract_system, read_description
+from shapefmu.fmi.archives import extract_system
 from shapefmu.fmi.ssp_targets import for_target
-from shapefmu.fmi.variable_types import KINDS, enumeration_items, kind_of, typed_value
+from shapefmu.fmi.ssp_connectors import Connector, checked_values, elements, fmu_connectors, resolve
+from shapefmu.fmi.variable_types import KINDS
 
 SSD = "http://ssp-standard.org/SSP1/SystemStructureDescription"
 SSC = "http://ssp-standard.org/SSP1/SystemStructureCommon"
@@ -49,19 +52,6 @@ TYPES = KINDS
 # Name of every parameter set we write. ecos applies parameter sets by name at initialisation
 # (``EcosSimulation.init(parameter_set=PARAMETER_SET)``); libcosim applies every binding.
 PARAMETER_SET = "parameters"
-
-
-@dataclass
-class Connector:
-    """One connector of a component: an FMU variable with its causality (``kind``) and type."""
-
-    name: str
-    kind: str  # input | output | parameter | calculatedParameter | inout
-    type: str = "Real"  # Real | Integer | Boolean | String | Enumeration
-    declared_type: str | None = None  # an Enumeration's type name
-    items: dict[str, int] = field(default_factory=dict)  # an Enumeration's {item: value}
-    start: str | None = None  # the FMU's start value, as written in its modelDescription.xml
-    variable_type: str | None = None  # the FMU variable's own type (FMI 3.0: Int8 ... UInt64), which bounds a value
 
 
 @dataclass
@@ -125,19 +115,6 @@ def _split(reference: str, what: str) -> tuple[str, str]:
     return component, variable
 
 
-def _fmu_connectors(fmu: Path) -> dict[str, Connector]:
-    """Inputs, outputs and parameters of an FMU, read from its modelDescription.xml."""
-    description = read_description(fmu)
-    connectors = {}
-    for variable in description.modelVariables:
-        kind = kind_of(variable)
-        if variable.causality in ("input", "output", "parameter", "calculatedParameter") and kind and not variable.shape:
-            declared = variable.declaredType.name if kind == "Enumeration" and variable.declaredType else None
-            connectors[variable.name] = Connector(variable.name, variable.causality, kind, declared,
-                                                  enumeration_items(description, variable), variable.start, variable.type)
-    return connectors
-
-
 class System:
     """An SSP system of FMU components; see the module docstring."""
 
@@ -167,7 +144,7 @@ class System:
         fmu = Path(fmu_path)
         if not fmu.is_file():
             raise ValueError(f"FMU file of component {name!r} not found: {fmu}")
-        component = Component(name, fmu.resolve(), str(fmu), _fmu_connectors(fmu))
+        component = Component(name, fmu.resolve(), str(fmu), fmu_connectors(fmu))
         if ssv is not None:
             ssv = Path(ssv)
             if not ssv.is_file():
@@ -216,6 +193,11 @@ class System:
                                     **self._checked_parameters(component, {variable: value}, f"component {name!r}")}
         return result
 
+    def connector(self, component: str, reference: str) -> tuple[Connector, int | None]:
+        """The connector of ``component`` that ``reference`` names, and the element's 1-based index
+        when it names one element of an array (``"u[2]"``); ValueError if there is none."""
+        return resolve(self.components[component].connectors, component, reference)
+
     def validate(self) -> System:
         """Check every component's FMU exists and every connection fits; return self."""
         for component in self.components.values():
@@ -227,7 +209,7 @@ class System:
         return self
 
     def _check_connection(self, connection: Connection, where: str, seen: dict | None = None) -> None:
-        ends = []
+        ends, sizes = [], []
         for role, component_name, connector_name, allowed in (
             ("start", connection.start_component, connection.start_connector, ("output", "calculatedParameter", "parameter")),
             ("end", connection.end_component, connection.end_connector, ("input", "parameter")),
@@ -236,9 +218,11 @@ class System:
             if component is None:
                 known = ", ".join(self.components) or "none"
                 raise ValueError(f"{where}: unknown component {component_name!r} (components: {known})")
-            connector = component.connectors.get(connector_name)
-            if connector is None:
-                raise ValueError(f"{where}: component {component_name!r} has no connector {connector_name!r}")
+            try:
+                connector, index = self.connector(component_name, connector_name)
+            except ValueError as error:
+                raise ValueError(f"{where}: {error}") from None
+            sizes.append(connector.size if index is None and connector.size is not None else 1)
             if connector.kind not in allowed:
                 raise ValueError(
                     f"{where}: {role} {component_name}.{connector_name} has causality {connector.kind!r}, "
@@ -252,21 +236,21 @@ class System:
             raise ValueError(f"{where}: type mismatch, {typed(ends[0], connection.start)} -> {typed(ends[1], connection.end)}")
         if ends[0].type != "Real" and (connection.factor != 1.0 or connection.offset != 0.0):
             raise ValueError(f"{where}: a linear transformation needs Real connectors, got {ends[0].type}")
-        already = seen if seen is not None else {c.end: c for c in self.connections}
-        if connection.end in already:
-            raise ValueError(f"{where}: input {connection.end} is already connected from {already[connection.end].start}")
-        if seen is not None:
-            seen[connection.end] = connection
+        if sizes[0] != sizes[1]:
+            raise ValueError(f"{where}: size mismatch, {connection.start} has {sizes[0]} element(s) and {connection.end} "
+                             f"{sizes[1]}; connect arrays of one size, or single elements as name[i]")
+        already = seen if seen is not None else {
+            element: c for c in self.connections
+            for element in elements(self.components[c.end_component].connectors, c.end_component, c.end_connector)}
+        for element in elements(self.components[connection.end_component].connectors, connection.end_component,
+                                connection.end_connector):
+            if element in already:
+                raise ValueError(f"{where}: input {element} is already connected from {already[element].start}")
+            if seen is not None:
+                seen[element] = connection
 
     def _checked_parameters(self, component: Component, values: dict, where: str) -> dict:
-        checked = {}
-        for name, value in values.items():
-            connector = component.connectors.get(name)
-            if connector is None:
-                raise ValueError(f"{where}: FMU {component.fmu.name} has no parameter or input {name!r}")
-            checked[name] = typed_value(value, connector.type, connector.items, f"{where}: parameter {name!r}",
-                                        connector.variable_type)
-        return checked
+        return checked_values(component.connectors, component.fmu.name, values, where)
 
     # ----------------------------------------------------------------------------- writing
     def write_ssd(self, path, *, target: str | None = None, step: float | None = None, fold: dict | None = None) -> Path:
@@ -373,10 +357,14 @@ def _parameter_set(name: str, values: dict, connectors: dict[str, Connector] | N
     parameter_set = ET.Element(f"{{{SSV}}}ParameterSet", {"version": "1.0", "name": name})
     parameters = ET.SubElement(parameter_set, f"{{{SSV}}}Parameters")
     for key, value in values.items():
-        kind = connectors[key].type if connectors and key in connectors else _type_of(value)
+        try:  # an array's element is typed by the array's connector
+            connector = resolve(connectors, "", key)[0] if connectors else None
+        except ValueError:
+            connector = None
+        kind = connector.type if connector else _type_of(value)
         text = str(value).lower() if kind == "Boolean" else (repr(float(value)) if kind == "Real" else str(value))
         if kind == "Enumeration":  # an ssv:Enumeration value is the item's name
-            text = {number: item for item, number in connectors[key].items.items()}.get(value, text)
+            text = {number: item for item, number in connector.items.items()}.get(value, text)
         node = ET.SubElement(parameters, f"{{{SSV}}}Parameter", {"name": key})
         ET.SubElement(node, f"{{{SSV}}}{kind}", {"value": text})
     return parameter_set
@@ -508,18 +496,20 @@ def _read_ssd(ssd: Path, origin: str, fmu_folder=None) -> System:
         if not fmu.is_file():
             looked = base if fmu_folder is None else Path(fmu_folder).resolve()
             raise ValueError(f"{where}: FMU file not found: {source} (looked in {looked})")
-        connectors = _fmu_connectors(fmu)
+        connectors = fmu_connectors(fmu)
         declared = _child(item, "Connectors")
         for connector in _children(declared, "Connector") if declared is not None else []:
             cname = connector.get("name")
-            if cname not in connectors:
-                raise ValueError(f"{where}: Connector {cname!r} is not a variable of {source}")
+            try:  # an array's element (u[2]) is a connector too, as SSP tools declare FMI 2.0 array elements
+                variable = resolve(connectors, name, cname or "")[0]
+            except ValueError:
+                raise ValueError(f"{where}: Connector {cname!r} is not a variable of {source}") from None
             typed = next((_local(c.tag) for c in connector if _local(c.tag) in TYPES), None)
-            if typed is not None and typed != connectors[cname].type:
-                raise ValueError(f"{where}: Connector {cname!r} is declared {typed} but the FMU has {connectors[cname].type}")
+            if typed is not None and typed != variable.type:
+                raise ValueError(f"{where}: Connector {cname!r} is declared {typed} but the FMU has {variable.type}")
             kind = connector.get("kind")
-            if kind is not None and kind != connectors[cname].kind and kind != "parameter":
-                raise ValueError(f"{where}: Connector {cname!r} is declared {kind} but the FMU has {connectors[cname].kind}")
+            if kind is not None and kind != variable.kind and kind != "parameter":
+                raise ValueError(f"{where}: Connector {cname!r} is declared {kind} but the FMU has {variable.kind}")
         component = Component(name, fmu, source, connectors)
         component.annotations = [copy.deepcopy(a) for a in item if _local(a.tag) == "Annotations"]
         bindings = _child(item, "ParameterBindings")

@@ -76,7 +76,7 @@ def _omsimulator(system, step: float, fold: dict):
     result.connections = []
     scaled: dict[tuple[str, str], float] = {}
     for connection in system.connections:
-        end = system.components[connection.end_component].connectors[connection.end_connector]
+        end = system.connector(connection.end_component, connection.end_connector)[0]
         if end.type == "String":
             raise ValueError(f"target 'omsimulator': connection {connection.start} -> {connection.end} joins String "
                              f"connectors, which OMSimulator does not import")

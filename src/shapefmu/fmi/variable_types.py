@@ -5,9 +5,16 @@ An FMI 2.0 or 3.0 variable has one of the SSP 1.0 connector kinds ``Real``, ``In
 types Integer). :func:`typed_value` turns a value given by a user -- the text of ``--set`` or of a
 parameter file, or a Python value -- into the Python value of a variable of that kind, refusing
 what does not fit with a message naming the variable, the value and what is valid.
+
+FMI 3.0 array variables (1-D: one ``<Dimension>``) are named as a whole (``k``) or element by element
+with the 1-based index of FMI 3.0's structured naming (``k[2]``);
+:func:`split_element` reads such a name and :func:`array_values` the value of a whole array: a
+sequence, or the text ``[v1, v2, ...]`` of a command line.
 """
 
 from __future__ import annotations
+
+import re
 
 # SSP connector kind of each FMI variable type.
 KIND = {"Real": "Real", "Float64": "Real", "Float32": "Real", "Integer": "Integer", "Enumeration": "Enumeration",
@@ -19,6 +26,50 @@ KINDS = ("Real", "Integer", "Boolean", "String", "Enumeration")
 def kind_of(variable) -> str | None:
     """The SSP connector kind of an fmpy ModelVariable, or None for a type with none (Binary, Clock)."""
     return KIND.get(variable.type)
+
+
+_ELEMENT = re.compile(r"^(.+)\[([1-9][0-9]*)\]$")
+
+
+def split_element(reference: str) -> tuple[str, int] | None:
+    """``("k", 2)`` for the element name ``"k[2]"``; None for a name without a trailing index.
+
+    Callers look the whole name up first: an FMI 2.0 variable may itself be called ``f[1]`` (flat
+    naming of a flattened Modelica array), and it is that scalar, not an element."""
+    match = _ELEMENT.match(reference)
+    return (match.group(1), int(match.group(2))) if match else None
+
+
+def array_size(variable) -> int | None:
+    """The number of elements of an fmpy ModelVariable that is an array (its shape's product, the
+    sizes the model description declares), or None for a scalar."""
+    shape = getattr(variable, "shape", None)
+    if not shape:
+        return None
+    size = 1
+    for extent in shape:
+        size *= extent
+    return size
+
+
+def array_values(value, size: int, what: str) -> list:
+    """The ``size`` elements of a whole-array ``value``: a sequence (a list, a numpy array) or the
+    text ``"[v1, v2, ...]"``; each still to be typed by :func:`typed_value`."""
+    if isinstance(value, str):
+        text = value.strip()
+        if not (text.startswith("[") and text.endswith("]")):
+            raise ValueError(f"{what} is an array of {size} elements: give all as [v1, ..., v{size}] or one as "
+                             f"name[i], got {value!r}")
+        inner = text[1:-1].strip()
+        items = [item.strip() for item in inner.split(",")] if inner else []
+    elif hasattr(value, "__iter__") and not isinstance(value, (bytes, dict)):
+        items = list(value)
+    else:
+        raise ValueError(f"{what} is an array of {size} elements: give all as [v1, ..., v{size}] or one as "
+                         f"name[i], got {value!r}")
+    if len(items) != size:
+        raise ValueError(f"{what} has {size} elements, got {len(items)} values: {value!r}")
+    return items
 
 
 _TRUE, _FALSE = ("true", "1"), ("false", "0")
