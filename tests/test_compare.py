@@ -162,3 +162,62 @@ def test_native_twins_print_the_demos_table_to_its_printed_digits(runs, cache, c
               for path in built}
     assert models == {"ReferencePlayer", "Shaper", "STOSController", "EKFTuner"}  # every command FMU, native
     assert not any("resources/slavemodule.txt" in zipfile.ZipFile(path).namelist() for path in built)
+
+
+def test_fmi3_native_fmus_print_the_demos_table_to_its_printed_digits(runs, cache, capsys):
+    """Every FMU as FMI 3.0 (the native twins and the plant; shapefmu compare --native --fmi-version 3.0)."""
+    from shapefmu.cli import main
+
+    argv = ["compare", str(MODEL), "--distance", str(X), "--fmus", str(cache), "--native", "--fmi-version", "3.0"]
+    for run in runs.runs:
+        argv += ["--candidate", run.name]
+    assert main(argv) == 0
+    assert capsys.readouterr().out.strip() == runs.table().strip()
+    from fmpy import read_model_description
+
+    built = [path for path in (Path(cache) / "native3").iterdir() if path.suffix == ".fmu"]
+    assert built and all(read_model_description(str(path)).fmiVersion == "3.0" for path in built)
+
+
+@pytest.mark.parametrize("name", ["convolution", "simultaneous"])
+def test_an_fmi3_shaper_fed_its_modes_by_an_array_parameter_set_gives_the_demos_shaped_row(runs, cache, tmp_path, name):
+    """The FMI 3.0 native Shaper and plant, the modes reaching the Shaper as the array parameters f and
+    zeta of an .ssv parameter set (closed-form zv: re-designed in C from them; the build had other
+    modes), run by the master from the .ssp: the demo's row, to its printed digits."""
+    from shapefmu.cosim.compare import Comparison, CandidateRun, FMUCache, _mode_arrays, _modes_hz, _signal_table
+    from shapefmu.cosim.master import Master
+    from shapefmu.fmi.ssp import System, read_ssp, write_system
+    from shapefmu.optimal import rigid_bang_bang
+
+    plant = load(MODEL)
+    fmus = FMUCache(cache, native=True, fmi_version="3.0")
+    modes = _modes_hz(plant)
+    built_for = modes if name == "simultaneous" else {"n_modes": 2, "f[1]": 1000.0, "f[2]": 1500.0}  # zv: other modes
+    kind = {"convolution": "zv", "simultaneous": "simultaneous"}[name]
+    shaper = fmus.slave("Shaper", kind=kind, Ts=H, **built_for)
+    player = fmus.slave("ReferencePlayer", table=_signal_table(rigid_bang_bang(plant, X, U)))
+    arrays = _mode_arrays(modes, shaper)
+    assert len(arrays["f"]) == 4 and arrays["f"][:2] == [modes["f[1]"], modes["f[2]"]]
+    system = (System("shaped").add("plant", fmus.plant(plant)).add("player", player)
+              .add("shaper", shaper, arrays)
+              .connect("player.y_mean", "shaper.u").connect("shaper.y", "plant.voltage"))
+    stop = runs.run(name).results["time"][-1]
+    path = write_system(system.for_experiment(stop), tmp_path / "shaped.ssp")
+    outputs = ["plant.position", "plant.deflection_1", "plant.deflection_2"]
+    with Master(read_ssp(path), H, record=["plant.voltage", *outputs]) as master:
+        results = master.run(stop)
+    applied = np.append(results["plant.voltage"][1:], results["plant.voltage"][-1])
+    metrics = move_metrics(results["time"], applied, results["plant.position"], [results[o] for o in outputs[1:]], X, U,
+                           1 / 2000.0)
+    demo = runs.run(name)
+    row = CandidateRun(name, metrics, metrics.move_time / runs.run("time-optimal").metrics.move_time, results, 0.0)
+    table = Comparison(runs.plant, X, U, H, runs.optimal_time, (row, *runs.runs), runs.command).table().splitlines()
+    assert table[2] == next(line for line in runs.table().splitlines() if line.startswith(f"{name} "))
+    assert metrics.residual < 1e-6 and demo.metrics.residual < 1e-6
+    if name == "convolution":  # the parameter set is what designed it: without it the build's modes ring
+        system.components["shaper"].parameters.clear()
+        with Master(system, H, record=["plant.voltage", *outputs]) as master:
+            unbound = master.run(stop)
+        ringing = move_metrics(unbound["time"], unbound["plant.voltage"], unbound["plant.position"],
+                               [unbound[o] for o in outputs[1:]], X, U, 1 / 2000.0)
+        assert ringing.residual > 1e-3

@@ -165,7 +165,7 @@ def _cmd_compare(args) -> int:
         raise ValueError("--target applies to --write-ssp FILE, which is not given")
     comparison = compare(args.file, args.distance, candidates=args.candidate or None, step=args.step, cache=args.fmus,
                          u_max=args.u_max, tolerance=args.tolerance, plot=args.plot, write_ssp=args.write_ssp,
-                         target=args.target, native=args.native)
+                         target=args.target, native=args.native, fmi_version=args.fmi_version)
     print(comparison.table())
     if args.plot:
         print(f"plot written to {args.plot}")
@@ -218,6 +218,9 @@ def register(commands) -> None:
     p.add_argument("--tolerance", type=float, default=1e-3, help="settling band of the move time, relative to X and U")
     p.add_argument("--native", action="store_true", help="run every command FMU as its native C twin (no Python in the "
                    "loop; built into FMUS/native/ with each system's parameters baked in)")
+    p.add_argument("--fmi-version", choices=("2.0", "3.0"), default="2.0",
+                   help="with --native: 3.0 runs every FMU, the plant too, as FMI 3.0 (built into FMUS/native3/; the "
+                   "shaper's modes bound as the array parameters f and zeta)")
     p.add_argument("--plot", metavar="PNG", type=output_file("plot"),
                    help="save u, position error and deflection of every candidate")
     _add_write_ssp(p, fold=False)

@@ -122,10 +122,14 @@ class FMUCache:
     per system) and measured plants. A file is rebuilt when its fingerprint (the slave's bundled
     sources, or the plant's matrices) differs from the one recorded in ``fingerprints.json``.
     With ``native`` the slaves are their native C twins (``shapefmu.fmi.native.twins``), in the
-    subfolder ``native/``."""
+    subfolder ``native/``; with ``fmi_version`` "3.0" the twins and the plants are FMI 3.0 FMUs, in
+    ``native3/``."""
 
-    def __init__(self, directory, native: bool = False):
-        self.native = native
+    def __init__(self, directory, native: bool = False, fmi_version: str = "2.0"):
+        if fmi_version != "2.0" and not native:
+            raise ValueError(f"fmi_version {fmi_version} needs native: the pythonfmu FMUs are FMI 2.0 only")
+        self.native, self.fmi_version = native, fmi_version
+        self.folder = "native3/" if fmi_version == "3.0" else "native/" if native else ""
         self.directory = Path(directory)
         self.directory.mkdir(parents=True, exist_ok=True)
         self._names: dict[Path, str] = {}  # slave FMU -> the model it is
@@ -156,13 +160,16 @@ class FMUCache:
             from shapefmu.fmi.native.twins import build_native, fingerprint as native_fingerprint
 
             fingerprint += native_fingerprint(name)
-            build = build_native
-            file_name = f"native/{name}.fmu"
+
+            def build(model, path, **starts):
+                return build_native(model, path, fmi_version=self.fmi_version, **starts)
+
+            file_name = f"{self.folder}{name}.fmu"
         if start_values:
             baked = json.dumps(start_values, sort_keys=True)
             file_name = file_name.replace(".fmu", f"_{hashlib.sha256(baked.encode()).hexdigest()[:12]}.fmu")
             fingerprint += baked
-        path = self._cached(file_name, fingerprint, lambda path: build(name, path, **start_values))
+        path = self._cached(file_name, fingerprint, lambda path: build(name, path, **elements(start_values)))
         self._names[path.resolve()] = name
         return path
 
@@ -179,7 +186,20 @@ class FMUCache:
         digest = hashlib.sha256(b"".join(np.ascontiguousarray(m).tobytes() for m in (plant.A, plant.B)))
         digest.update(repr((plant.name, plant.inputs)).encode())
         model = measured_plant(plant)
-        return self._cached(fmu_file_name(model.name), digest.hexdigest(), lambda path: build_plant_fmu(model, path))
+        return self._cached(self.folder.replace("native/", "") + fmu_file_name(model.name), digest.hexdigest(),
+                            lambda path: build_plant_fmu(model, path, fmi_version=self.fmi_version))
+
+
+def elements(values: dict) -> dict:
+    """``values`` with each array value (an FMI 3.0 array parameter, a list) as its elements
+    ``name[1]``, ``name[2]``, ...: the start values a twin is built from name elements."""
+    flat = {}
+    for name, value in values.items():
+        if isinstance(value, (list, tuple)):
+            flat.update({f"{name}[{i}]": item for i, item in enumerate(value, start=1)})
+        else:
+            flat[name] = value
+    return flat
 
 
 # ---------------------------------------------------------------------------------------------
@@ -279,9 +299,23 @@ def _modes_hz(plant) -> dict:
     return values
 
 
+def _mode_arrays(modes: dict, fmu) -> dict:
+    """The shaper's modes (``_modes_hz``) as the FMI 3.0 array parameters f and zeta of ``fmu``, whole:
+    the modes first, the FMU's own start values after them (unused: n_modes says how many count)."""
+    from fmpy import read_model_description
+
+    declared = {v.name: str(v.start).split() for v in read_model_description(str(fmu)).modelVariables}
+    arrays = {"n_modes": modes["n_modes"]}
+    for name in ("f", "zeta"):
+        given = [modes[f"{name}[{i}]"] for i in range(1, modes["n_modes"] + 1)]
+        arrays[name] = given + [float(v) for v in declared[name][len(given):]]
+    return arrays
+
+
 def compare(plant_model, distance: float, candidates=CANDIDATES, step: float = 1e-6, *, cache="fmus",
             u_max: float | None = None, tolerance: float = 1e-3, stop_time: float | None = None,
-            plot=None, write_ssp=None, target: str | None = None, native: bool = False) -> Comparison:
+            plot=None, write_ssp=None, target: str | None = None, native: bool = False,
+            fmi_version: str = "2.0") -> Comparison:
     """Run the plant with each candidate command as an SSP system of FMUs; see the module docstring.
 
     ``plant_model``: a model file or Plant of paper 002's eq. (1) form (a rigid body and 1-4 modes).
@@ -294,7 +328,8 @@ def compare(plant_model, distance: float, candidates=CANDIDATES, step: float = 1
     ``target`` (None, "libcosim" or "omsimulator", with the macro step ``step``; see
     :func:`shapefmu.fmi.ssp.write_system`), and ``Comparison.written`` lists the files. ``native``:
     every slave is its native C twin, built with the system's parameters baked in (a twin designs
-    at build time).
+    at build time). ``fmi_version`` "3.0" (with ``native``): every FMU, plant included, is FMI 3.0,
+    and the shaper's mode frequencies and dampings are bound as the array parameters f and zeta.
     """
     from shapefmu.cosim.master import Master
     from shapefmu.fmi.ssp import System, write_system
@@ -320,7 +355,7 @@ def compare(plant_model, distance: float, candidates=CANDIDATES, step: float = 1
     u_max = check_positive(u_max, "u_max")
     modes = _modes_hz(plant)
     window = 2.0 * math.pi / min(omega for omega, _ in plant.flexible_modes())
-    fmus = FMUCache(cache, native=native)
+    fmus = FMUCache(cache, native=native, fmi_version=fmi_version)
     plant_fmu = fmus.plant(plant)
     rigid = rigid_bang_bang(plant, distance, u_max)
     optimal = time_optimal(plant, distance, u_max)
@@ -348,6 +383,10 @@ def compare(plant_model, distance: float, candidates=CANDIDATES, step: float = 1
             sys_ = system(name).add("player", player, {"table": table}).connect("player.y_mean", command)
         elif name in _SHAPER_KINDS:
             shaper = {"kind": _SHAPER_KINDS[name], "Ts": step, **modes}
+            if fmi_version == "3.0":
+                shaper = {**shaper, **_mode_arrays(modes, fmus.slave("Shaper"))}
+                for key in [k for k in shaper if "[" in k]:
+                    del shaper[key]
             sys_ = (system(name).add("player", player, {"table": _signal_table(rigid)})
                     .add("shaper", fmus.slave("Shaper"), shaper)
                     .connect("player.y_mean", "shaper.u").connect("shaper.y", command))

@@ -280,10 +280,12 @@ class Unit:
         """Every element of array ``name``: ``given[i]``, else the start value from the model description."""
         variable = self.variables[name]
         size = array_size(variable)
+        call = f"{self.prefix}Set{self.family(name).name}({name})"
         starts = (variable.start or "").split()
         if len(given) < size and len(starts) != size:
-            raise FMUFailure(self, f"{self.prefix}Set{self.family(name).name}({name})",
-                             f"{self.name}.{name} has no start value for each of its {size} elements: set them all")
+            raise FMUFailure(self, call, f"{self.name}.{name} has no start value for each of its {size} elements: set them all")
+        if self.family(name).name != "String":  # the model description's text, as the values it stands for
+            starts = self._typed(name, starts, call)
         return [given[i] if i in given else starts[i] for i in range(size)]
 
     def _typed(self, name: str, items: list, call: str) -> list:
