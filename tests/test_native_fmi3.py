@@ -414,3 +414,61 @@ def test_a_clocked_fmu_under_valgrind_finds_no_error_and_no_leak(clocked, fmi3_h
          "--teardown", "atexit", *_host3_arguments(fmu, tmp_path)], capture_output=True, text=True, timeout=300)
     assert completed.returncode == 0, completed.stderr[-3000:]
     assert "ERROR SUMMARY: 0 errors" in completed.stderr
+
+
+# ---------------------------------------------------------------- our master
+
+SOURCE_TABLE = ('{"kind": "signal_table", "interpolation": "hold", "time": [0, 0.004, 0.011, 0.02, 0.031], '
+                '"value": [0.0, 1.0, -0.5, 2.0, 0.25]}')
+
+
+@pytest.fixture(scope="module")
+def source(tmp_path_factory):
+    """A native FMI 2.0 ReferencePlayer playing steps, to drive every input of a case."""
+    from shapefmu.fmi.native.twins import build_native
+
+    return build_native("ReferencePlayer", tmp_path_factory.mktemp("source") / "Source.fmu", table=SOURCE_TABLE)
+
+
+def _master_run(source, fmu, step, stop):
+    from shapefmu.cosim import Master
+    from shapefmu.fmi.ssp import System
+
+    variables = _variables(fmu)
+    system = System("driven").add("source", source).add("case", fmu)
+    for variable in variables.values():
+        if variable.causality == "input" and variable.type in ("Real", "Float64"):
+            system.connect("source.y", f"case.{variable.name}")
+    outputs = [f"case.{v.name}" for v in variables.values() if v.causality == "output" and v.type in ("Real", "Float64")]
+    with Master(system, step, record=outputs) as master:
+        return master.run(stop), outputs, master.loop_kind
+
+
+@pytest.mark.parametrize("name", SAMPLED)
+def test_our_master_runs_the_fmi3_fmu_with_and_without_its_clock_as_the_fmi2_twin(twins, clocked, source, name):
+    fmu2, fmu3 = twins[name]
+    step = _interval(clocked[name])
+    stop = min(0.05, 2000 * step)
+    two, outputs, kind2 = _master_run(source, fmu2, step, stop)
+    three, _, kind3 = _master_run(source, fmu3, step, stop)
+    ticked, _, kind_clocked = _master_run(source, clocked[name], step, stop)
+    assert kind3 == kind2 and kind_clocked == "Python"  # the master ticks clocks in its Python loop
+    moving = 0
+    for output in outputs:
+        scale = max(1.0, float(np.max(np.abs(two[output]))))
+        np.testing.assert_allclose(three[output], two[output], rtol=0, atol=1e-12 * scale, err_msg=output)
+        np.testing.assert_allclose(ticked[output], two[output], rtol=0, atol=1e-12 * scale, err_msg=output)
+        moving += np.ptp(two[output]) > 0
+    assert moving
+
+
+def test_our_master_refuses_a_step_that_would_miss_a_clock_tick(clocked, source):
+    from shapefmu.cosim import Master
+    from shapefmu.fmi.ssp import System
+
+    fmu = clocked["shaper zvd"]
+    with pytest.raises(ValueError, match=r"component 'case': its clock \(value reference \d+\) has interval 0.001 s, "
+                                         r"not a whole number of its communication step 0.0003 s"):
+        Master(System("s").add("case", fmu), 3e-4)
+    with pytest.raises(ValueError, match="not a whole number of its communication step 0.002 s"):
+        Master(System("s").add("case", fmu), 1e-3, step_multiples={"case": 2})

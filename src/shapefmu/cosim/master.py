@@ -72,6 +72,7 @@ from shapefmu.cosim.graph import Stage, _feeds_through, output_dependencies, sch
 from shapefmu.cosim.types import array_size, array_values, enumeration_items, kind_of, typed_value
 from shapefmu.cosim.loading import load_units
 from shapefmu.cosim.units import FMUFailure
+from shapefmu.cosim.units3 import clock_ticks_on_steps
 from shapefmu.fmi.ssp import System, read_ssp
 from shapefmu.runtime.checks import check_size
 
@@ -147,6 +148,8 @@ class Master:
         self._finalizer = weakref.finalize(self, _release, self.units, self._folders)
         self._unit = {u.name: u for u in self.units}
         try:
+            for unit in self.units:  # a clock's ticks must be communication points (see .units3)
+                clock_ticks_on_steps(unit, self.step * self.multiples[unit.name])
             self._build(record)
             # read once (.ssv files included); applied at each run's initialisation
             self._bindings = {u.name: self.system.parameter_values(u.name) for u in self.units}

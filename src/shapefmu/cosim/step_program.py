@@ -241,6 +241,9 @@ def python_only_reason(master, blocks) -> str | None:
                 return f"component {master.units[op[1]].name!r} runs as Model Exchange (integrated in Python)"
             if op[0] == "loop":
                 return f"the algebraic loop through {', '.join(master._loops[op[1]].loop_variables)} is solved in Python"
+    for unit in master.units:
+        if getattr(unit, "clocks", None):
+            return f"component {unit.name!r} has clocks, which the master ticks in Python"
     for c in master.system.connections:
         family = master._unit[c.end_component].slots(c.end_connector, inputs=True)[0]
         if master._unit[c.end_component].channels[family].family.c_type is None:

@@ -7,14 +7,21 @@ return or intermediate updates; ``fmi3InstantiateModelExchange``), initialisatio
 to end the simulation in ``terminateSimulation``, and the time reached in ``lastSuccessfulTime``),
 ``fmi3UpdateDiscreteStates`` in Model Exchange event iterations, and FMU states.
 
-A Co-Simulation FMU that needs event mode (``hasEventMode`` with clocks or events it must be
-told of) is run without it: the master does not handle ``eventHandlingNeeded``, and refuses an FMU
-that reports it with an error naming the capability.
+Clocks: a Co-Simulation FMU with periodic input clocks of constant interval (``intervalDecimal``,
+``shiftDecimal``; shapefmu's FMUs built with ``--clock``) is instantiated with Event Mode and its
+clocks are ticked at communication points: after initialisation (the FMU is then in Event Mode) and
+before every step from a tick, Event Mode, ``fmi3SetClock`` of the clocks ticking then,
+``fmi3UpdateDiscreteStates`` until no update is needed, ``fmi3EnterStepMode``. The master checks
+that every tick falls on a communication point of the component (``clock_ticks_on_steps``). Other
+clocks (output clocks, clocks of other interval variabilities) are refused when the FMU is loaded.
+Without clocks a Co-Simulation FMU runs without Event Mode: the master does not handle
+``eventHandlingNeeded``, and refuses an FMU that reports it with an error naming the capability.
 """
 
 from __future__ import annotations
 
 import collections
+import math
 from ctypes import byref, c_bool, c_double, c_uint, c_void_p
 from pathlib import Path
 
@@ -58,6 +65,7 @@ class Unit3(Unit):
         self.variables = {v.name: v for v in description.modelVariables}
         self.messages: collections.deque[str] = collections.deque(maxlen=20)
         _QUEUES[id(self.messages)] = self.messages
+        self.clocks = input_clocks(self.name, self.fmu_path, Path(unzip_directory))
         self.fmu = self._make_fmu(unzip_directory)
         self.fmu.component = self._instantiate()
         if not self.fmu.component:
@@ -82,7 +90,7 @@ class Unit3(Unit):
         resources = str(Path(self.fmu.unzipDirectory) / "resources") + "/"  # FMI 3.0: a path, not a URI
         return self.fmu.fmi3InstantiateCoSimulation(
             self.name.encode(), self.description.guid.encode(), resources.encode(), False, False,
-            False, False, (c_uint * 0)(), 0, id(self.messages), _LOGGER, _NO_INTERMEDIATE_UPDATE)
+            bool(self.clocks), False, (c_uint * 0)(), 0, id(self.messages), _LOGGER, _NO_INTERMEDIATE_UPDATE)
 
     def setup(self, start_time: float) -> None:
         self._start_time = start_time  # FMI 3.0 passes it to fmi3EnterInitializationMode
@@ -90,9 +98,36 @@ class Unit3(Unit):
     def enter_initialization(self) -> None:
         self._call("fmi3EnterInitializationMode", self.fmu.enterInitializationMode, startTime=self._start_time)
 
+    def exit_initialization(self, start_time: float, tolerance: float) -> None:
+        super().exit_initialization(start_time, tolerance)
+        if self.clocks:  # in Event Mode now (eventModeUsed): the ticks at the start time
+            self._tick(start_time, in_event_mode=True)
+
+    def _tick(self, t: float, in_event_mode: bool = False) -> None:
+        """Tick the clocks due at ``t`` (an Event Mode of their own, see the module docstring)."""
+        due = [vr for vr, interval, shift in self.clocks if on_tick(t - self._start_time, interval, shift)]
+        if not due and not in_event_mode:
+            return
+        if not in_event_mode:
+            self._call("fmi3EnterEventMode", self.fmu.enterEventMode)
+        if due:
+            self._call("fmi3SetClock", self.fmu.setClock, due, [True] * len(due))
+        for _ in range(MAX_EVENT_ITERATIONS):
+            more, terminate, *_ = self._call("fmi3UpdateDiscreteStates", self.fmu.updateDiscreteStates)
+            if terminate:
+                raise FMUFailure(self, "fmi3UpdateDiscreteStates", "terminateSimulation at a clock tick", time=t)
+            if not more:
+                break
+        else:
+            raise FMUFailure(self, "fmi3UpdateDiscreteStates", f"discrete states still changing after "
+                             f"{MAX_EVENT_ITERATIONS} iterations at a clock tick", time=t)
+        self._call("fmi3EnterStepMode", self.fmu.enterStepMode)
+
     def step(self, t: float, h: float, final: bool = True) -> bool:
-        """One fmi3DoStep; True when the FMU asked to end the simulation (``terminated_at``);
-        ``final``: noSetFMUStatePriorToCurrentPoint (see :meth:`Unit.step`)."""
+        """One fmi3DoStep (after the clock ticks due at ``t``); True when the FMU asked to end the
+        simulation (``terminated_at``); ``final``: noSetFMUStatePriorToCurrentPoint (see :meth:`Unit.step`)."""
+        if self.clocks and t != self._start_time:
+            self._tick(t)
         event, terminate, early, last = self._flags
         status = self.do_step(self.c, c_double(t), c_double(h), c_bool(final), byref(event), byref(terminate),
                               byref(early), byref(last))
@@ -109,6 +144,53 @@ class Unit3(Unit):
 
     def stop_or_fail(self, t: float, h: float, status: int) -> bool:
         raise FMUFailure(self, "fmi3DoStep", status, time=t)
+
+
+# Event iterations at one tick before the master gives up (the FMU's discrete states keep changing).
+MAX_EVENT_ITERATIONS = 100
+# A tick falls on a communication point t when |t - tick| <= TICK_TOLERANCE * interval (the rule of
+# shapefmu's sample grid, which the master's times t0 + k h meet to rounding).
+TICK_TOLERANCE = 1e-6
+
+
+def on_tick(elapsed: float, interval: float, shift: float) -> bool:
+    """Whether a clock of ``interval`` and ``shift`` ticks ``elapsed`` s after the start."""
+    k = round((elapsed - shift) / interval)
+    return k >= 0 and abs(elapsed - shift - k * interval) <= TICK_TOLERANCE * interval
+
+
+def input_clocks(name: str, fmu_path: Path, unzip_directory: Path) -> list[tuple[int, float, float]]:
+    """(value reference, interval, shift) of each input clock of the FMU; a clock the master cannot
+    tick (an output clock, an interval other than a constant decimal one) is refused with a message."""
+    import xml.etree.ElementTree as ET
+
+    root = ET.parse(unzip_directory / "modelDescription.xml").getroot()
+    clocks = []
+    for clock in root.iter("Clock"):
+        label = f"component {name!r} ({fmu_path.name}): clock {clock.get('name')!r}"
+        if clock.get("causality") != "input" or clock.get("intervalVariability") != "constant":
+            raise ValueError(f"{label} is a {clock.get('causality')} clock of interval variability "
+                             f"{clock.get('intervalVariability')}; the master ticks input clocks of constant interval only")
+        try:
+            interval, shift = float(clock.get("intervalDecimal", "")), float(clock.get("shiftDecimal", "0"))
+        except ValueError:
+            raise ValueError(f"{label} declares no decimal interval (intervalDecimal); the master ticks those only") from None
+        if not (interval > 0 and shift >= 0 and math.isfinite(interval + shift)):
+            raise ValueError(f"{label}: intervalDecimal must be > 0 and shiftDecimal >= 0, got {interval!r}, {shift!r}")
+        clocks.append((int(clock.get("valueReference")), interval, shift))
+    return clocks
+
+
+def clock_ticks_on_steps(unit, step: float) -> None:
+    """Every tick of ``unit``'s clocks falls on one of its communication points (multiples of
+    ``step``, its macro step times its step multiple), else a ValueError says which and why."""
+    for vr, interval, shift in getattr(unit, "clocks", ()):
+        for what, value in (("interval", interval), ("shift", shift)):
+            ratio = value / step
+            if abs(ratio - round(ratio)) > TICK_TOLERANCE * max(1.0, ratio):
+                raise ValueError(f"component {unit.name!r}: its clock (value reference {vr}) has {what} {value!r} s, not a "
+                                 f"whole number of its communication step {step!r} s; the master ticks clocks at "
+                                 f"communication points: choose a step that divides it")
 
 
 class ModelExchangeUnit3(ModelExchangeUnit, Unit3):
