@@ -91,13 +91,7 @@ const char *fmi2GetVersion(void) { return fmi2Version; }
 
 fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nCategories, const fmi2String categories[]) {
     REQUIRE(c, ANY_MODE, "fmi2SetDebugLogging");
-    REQUIRE_ARRAY(categories, nCategories, "fmi2SetDebugLogging");
-    for (size_t i = 0; i < nCategories; i++)
-        if (categories[i] == NULL || (strcmp(categories[i], "logAll") != 0 && strcmp(categories[i], "logStatusError") != 0))
-            return fmi2_fail(inst, "fmi2SetDebugLogging: unknown log category %s (known: logAll, logStatusError)",
-                             categories[i] == NULL ? "NULL" : categories[i]);
-    inst->logging_on = loggingOn;
-    return fmi2OK;
+    return core_set_debug_logging(inst, loggingOn, nCategories, categories, "fmi2SetDebugLogging");
 }
 
 fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fmi2Real tolerance,

@@ -244,15 +244,16 @@ void fmi3FreeInstance(fmi3Instance instance) {
 
 const char *fmi3GetVersion(void) { return fmi3Version; }
 
+/* Back to the start values and the Instantiated mode (fmi3Reset: as if instantiated anew). */
+fmi3Status fmi3Reset(fmi3Instance instance) {
+    ENTER(instance, ANY_MODE, "fmi3Reset");
+    core_reset(inst);
+    return fmi3OK;
+}
+
 fmi3Status fmi3SetDebugLogging(fmi3Instance instance, fmi3Boolean loggingOn, size_t nCategories, const fmi3String categories[]) {
     ENTER(instance, ANY_MODE, "fmi3SetDebugLogging");
-    ENTER_ARRAY(categories, nCategories, "fmi3SetDebugLogging");
-    for (size_t i = 0; i < nCategories; i++)
-        if (categories[i] == NULL || (strcmp(categories[i], "logAll") != 0 && strcmp(categories[i], "logStatusError") != 0))
-            return FAIL("fmi3SetDebugLogging: unknown log category %s (known: logAll, logStatusError)",
-                        categories[i] == NULL ? "NULL" : categories[i]);
-    inst->logging_on = loggingOn;
-    return fmi3OK;
+    return (fmi3Status)core_set_debug_logging(inst, loggingOn, nCategories, categories, "fmi3SetDebugLogging");
 }
 
 fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean toleranceDefined, fmi3Float64 tolerance,
@@ -273,12 +274,6 @@ fmi3Status fmi3ExitInitializationMode(fmi3Instance instance) {
 fmi3Status fmi3Terminate(fmi3Instance instance) {
     ENTER(instance, RUNNING, "fmi3Terminate");
     inst->mode = FMI2_TERMINATED;
-    return fmi3OK;
-}
-
-fmi3Status fmi3Reset(fmi3Instance instance) {
-    ENTER(instance, ANY_MODE, "fmi3Reset");
-    core_reset(inst);
     return fmi3OK;
 }
 

@@ -116,6 +116,18 @@ fmi2Status core_setup(Fmi2Instance *inst, double start_time, int stop_time_defin
     return fmi2OK;
 }
 
+fmi2Status core_set_debug_logging(Fmi2Instance *inst, int logging_on, size_t n_categories, const char *const categories[],
+                                  const char *function) {
+    if (n_categories > 0 && categories == NULL)
+        return fmi2_fail(inst, "%s: categories is NULL but holds %zu values", function, n_categories);
+    for (size_t i = 0; i < n_categories; i++)
+        if (categories[i] == NULL || (strcmp(categories[i], "logAll") != 0 && strcmp(categories[i], "logStatusError") != 0))
+            return fmi2_fail(inst, "%s: unknown log category %s (known: logAll, logStatusError)", function,
+                             categories[i] == NULL ? "NULL" : categories[i]);
+    inst->logging_on = logging_on;
+    return fmi2OK;
+}
+
 fmi2Status core_exit_initialization(Fmi2Instance *inst) {
     if (model_exit_initialization(inst) != fmi2OK) return fmi2Error;
     inst->clock_ticks = 0.0;

@@ -50,6 +50,9 @@ void core_free(Fmi2Instance *inst);
 fmi2Status core_setup(Fmi2Instance *inst, double start_time, int stop_time_defined, double stop_time,
                       const char *function);
 fmi2Status core_exit_initialization(Fmi2Instance *inst);
+/* Logging on or off for the given categories (logAll, logStatusError; none: all of them). */
+fmi2Status core_set_debug_logging(Fmi2Instance *inst, int logging_on, size_t n_categories, const char *const categories[],
+                                  const char *function);
 void core_reset(Fmi2Instance *inst);
 
 /* ---- variables: value references of the contract (fmi2_model.h), "slots" to the FMI 3.0 layer */
