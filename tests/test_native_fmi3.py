@@ -472,3 +472,51 @@ def test_our_master_refuses_a_step_that_would_miss_a_clock_tick(clocked, source)
         Master(System("s").add("case", fmu), 3e-4)
     with pytest.raises(ValueError, match="not a whole number of its communication step 0.002 s"):
         Master(System("s").add("case", fmu), 1e-3, step_multiples={"case": 2})
+
+
+@pytest.mark.parametrize("name", SAMPLED)
+def test_fmpys_fmi3_api_ticking_the_clock_runs_the_clocked_fmu_as_fmpy_simulates_the_fmi2_twin(twins, clocked, name):
+    """fmpy's simulate_fmu ticks no clock (0.3.32); its FMI 3.0 binding (FMU3Slave) does what a clock-
+    scheduling host does, tick by tick, and meets fmpy's own simulation of the FMI 2.0 twin."""
+    from fmpy import simulate_fmu
+
+    fmu2, fmu3 = twins[name][0], clocked[name]
+    ts = _interval(fmu3)
+    stop = min(STOP, 2000 * ts)
+    steps = round(stop / ts)
+    variables2, variables3 = _variables(fmu2), _variables(fmu3)
+    inputs = [v.name for v in variables2.values() if v.causality == "input" and v.type == "Real"]
+    outputs = [v.name for v in variables2.values() if v.causality == "output" and v.type == "Real"]
+    t = np.arange(steps + 1) * ts
+    signal = np.zeros(t.size, dtype=[("time", float)] + [(n, float) for n in inputs])
+    signal["time"] = t
+    for j, n in enumerate(inputs):
+        signal[n] = np.sin(2 * np.pi * t / (100 * ts) + j) + (np.mod(t, 100 * ts) < 50 * ts)
+    two = simulate_fmu(str(fmu2), stop_time=stop, step_size=ts, output_interval=ts, output=outputs,
+                       input=signal if inputs else None)
+    slave = _clocked_slave(fmu3)
+    clock = [_clock(fmu3).valueReference]
+    slave.enterInitializationMode(startTime=0.0)
+    slave.exitInitializationMode()
+    rows, read = [], [variables3[n].valueReference for n in outputs]
+    for k in range(steps + 1):
+        if k > 0:  # as fmpy records: the outputs a step ends with, before the inputs of the next
+            rows.append(slave.getFloat64(read))
+            slave.enterEventMode()
+        for n in inputs:
+            slave.setFloat64([variables3[n].valueReference], [float(signal[n][k])])
+        slave.setClock(clock, [True])
+        slave.updateDiscreteStates()
+        slave.enterStepMode()
+        if k == 0:  # ... and at the start, after the first inputs
+            rows.append(slave.getFloat64(read))
+        if k < steps:
+            slave.doStep(k * ts, ts)
+    slave.terminate()
+    slave.freeInstance()
+    three = np.array(rows)
+    for j, output in enumerate(outputs):
+        reference = two[output].astype(float)
+        scale = max(1.0, float(np.max(np.abs(reference))))
+        np.testing.assert_allclose(three[:, j], reference, rtol=0, atol=1e-12 * scale, err_msg=output)
+    assert max(np.ptp(two[o]) for o in outputs) > 0
