@@ -76,11 +76,12 @@ def test_native_shaper_and_filter_archives(native_shapers, native_filters):
         assert_complete(fmu)
 
 
-def test_every_native_twin_archive(tmp_path):
+@pytest.mark.parametrize("version", ["2.0", "3.0"])
+def test_every_native_twin_archive(tmp_path, version):
     from shapefmu.fmi.native.twins import build_all_native
 
-    for fmu in build_all_native(tmp_path):
-        assert_complete(fmu)
+    for fmu in build_all_native(tmp_path, version):
+        assert_complete(fmu, fmi3=version == "3.0")
 
 
 def test_plant_archives_fmi2_and_fmi3(plant_fmus, tmp_path):
@@ -108,13 +109,23 @@ def test_a_plant_description_is_escaped_on_its_page(tmp_path):
     assert "<script>" not in page and "&lt;script&gt;alert(1)&lt;/script&gt; &amp; &quot;quoted&quot;" in page
 
 
-@pytest.mark.parametrize("which", ["Shaper", "plant"])
+def _fmi3_shaper(native_shapers, tmp_path):
+    from shapefmu.fmi.native.twins import build_native
+
+    starts = next(iter(native_shapers.values()))[1]
+    return build_native("Shaper", tmp_path / "Shaper3.fmu", fmi_version="3.0", **starts)
+
+
+@pytest.mark.parametrize("which", ["Shaper", "plant", "Shaper FMI 3.0"])
 def test_sources_compile_alone_with_the_standard_headers(which, native_shapers, plant_fmus, tmp_path):
     """sources/ and the standard's headers are all a tool needs: the library compiled from them,
-    put in place of the shipped one, gives the same numbers in fmpy."""
+    put in place of the shipped one, gives the same numbers in fmpy. An FMI 3.0 FMU's sources need
+    FMI 3.0's headers only (a tool importing FMI 3.0 sources has no FMI 2.0 ones)."""
     from fmpy import simulate_fmu
 
-    fmu = next(iter(native_shapers.values()))[0] if which == "Shaper" else plant_fmus["disk_drive"]
+    fmi3 = which.endswith("3.0")
+    fmu = {"Shaper": lambda: next(iter(native_shapers.values()))[0], "plant": lambda: plant_fmus["disk_drive"],
+           "Shaper FMI 3.0": lambda: _fmi3_shaper(native_shapers, tmp_path)}[which]()
     folder = tmp_path / "unpacked"
     with zipfile.ZipFile(fmu) as archive:
         archive.extractall(folder)
@@ -122,6 +133,9 @@ def test_sources_compile_alone_with_the_standard_headers(which, native_shapers, 
     identifier = build.find("BuildConfiguration").get("modelIdentifier")
     c_files = [f.get("name") for f in build.iter("SourceFile")]
     include = standard_headers(tmp_path / "standard")
+    if fmi3:  # FMI 3.0's headers only
+        for header in include.glob("fmi2*.h"):
+            header.unlink()
     library = tmp_path / f"{identifier}.so"
     compiler = shutil.which("gcc") or shutil.which("cc")
     subprocess.run([compiler, "-shared", "-fPIC", "-O2", "-std=c99", "-I", str(include), "-o", str(library),
@@ -129,9 +143,10 @@ def test_sources_compile_alone_with_the_standard_headers(which, native_shapers, 
     rebuilt = tmp_path / "Rebuilt.fmu"
     with zipfile.ZipFile(fmu) as old, zipfile.ZipFile(rebuilt, "w") as new:
         for item in old.infolist():
-            data = library.read_bytes() if item.filename == f"binaries/linux64/{identifier}.so" else old.read(item)
+            shipped = f"binaries/{'x86_64-linux' if fmi3 else 'linux64'}/{identifier}.so"
+            data = library.read_bytes() if item.filename == shipped else old.read(item)
             new.writestr(item, data)
-    inputs = {"Shaper": ("u", 1.0), "plant": ("voltage", 1.0)}[which]
+    inputs = {"Shaper": ("u", 1.0), "plant": ("voltage", 1.0), "Shaper FMI 3.0": ("u", 1.0)}[which]
     runs = [simulate_fmu(str(path), stop_time=0.01, step_size=1e-4, output_interval=1e-4,
                          start_values={inputs[0]: inputs[1]}) for path in (fmu, rebuilt)]
     for name in runs[0].dtype.names:
