@@ -190,6 +190,30 @@ def test_the_built_fmu_leaves_less_vibration_on_the_machine_than_reported(record
         assert measured <= pick.at_modes * 1.02 + 1e-3, (mode, measured, pick.at_modes)
 
 
+def test_recommend_builds_the_pick_as_fmi3_whose_ssv_gives_the_fmi2_builds_numbers(recordings, tmp_path):
+    """--build --fmi-version 3.0: the same pick as an FMI 3.0 native FMU (its modes an array f), its .ssv
+    (element bindings f[1] ...) read by our master: the FMI 2.0 build's output to 1e-12."""
+    from fmpy import read_model_description
+
+    from shapefmu.cosim.master import simulate
+    from shapefmu.fmi.ssp import System
+
+    runs = {}
+    for version in ("2.0", "3.0"):
+        fmu = tmp_path / f"Pick{version[0]}.fmu"
+        code, _, err = guarded(["recommend", recordings["two modes"][0], "--axis", "x", "--build", fmu,
+                                "--fmi-version", version], seconds=120)
+        assert code == 0, err
+        assert read_model_description(str(fmu)).fmiVersion == version
+        system = System("pick").add("shaper", fmu, parameters={"u": 1.0}, ssv=fmu.with_suffix(".ssv"))
+        runs[version] = simulate(system, 0.2, 2e-5)["shaper.y"]
+    assert np.ptp(runs["2.0"]) > 0.5
+    np.testing.assert_allclose(runs["3.0"], runs["2.0"], rtol=0, atol=1e-12)
+    code, _, err = guarded(["recommend", recordings["two modes"][0], "--axis", "x", "--build", tmp_path / "P.fmu",
+                            "--python", "--fmi-version", "3.0"], seconds=120)
+    assert code != 0 and "--fmi-version 3.0 needs the native FMU" in err and not (tmp_path / "P.fmu").exists()
+
+
 def test_several_recordings_give_one_recommendation_for_the_worst_of_them(tmp_path):
     """The machine unloaded (40 Hz) and loaded (33 Hz): the recommendation for both holds on each
     recording, judged alone by the same metric, and the loaded one is what limits it."""

@@ -130,7 +130,7 @@ def _cmd_recommend(args) -> int:
 
         print(f"recommendation plot written to {plot_recommendation(spectra, advice, args.plot)}")
     if args.build:
-        for path in _build(advice.pick, Path(args.build), python=args.python):
+        for path in _build(advice.pick, Path(args.build), python=args.python, fmi_version=args.fmi_version):
             print(f"wrote {path}")
     return 0
 
@@ -168,8 +168,9 @@ def _print_table(advice, recordings: int) -> None:
           f"{pick.max_accel:.0f} mm/s^2 ({gain:.2f} x the best of Klipper's six, {base.label})")
 
 
-def _build(pick, out: Path, *, python: bool) -> list[Path]:
-    """The pick as a Shaper or ShapeFilter FMU (native unless ``python``) and its .ssv parameter set."""
+def _build(pick, out: Path, *, python: bool, fmi_version: str = "2.0") -> list[Path]:
+    """The pick as a Shaper or ShapeFilter FMU (native unless ``python``; native as FMI
+    ``fmi_version``) and its .ssv parameter set."""
     from shapefmu.fmi.ssp import write_ssv
 
     if pick.family == "window":
@@ -185,10 +186,16 @@ def _build(pick, out: Path, *, python: bool) -> list[Path]:
             starts[f"zeta[{i}]"] = min(z, 0.5)
         starts["Ts"] = 1.0 / (200.0 * max(pick.frequencies))
     if python:
-        from shapefmu.fmi.python.builder import build_fmu as builder
+        if fmi_version != "2.0":
+            raise ValueError(f"--fmi-version {fmi_version} needs the native FMU: the pythonfmu FMUs (--python) are "
+                             f"FMI 2.0 only")
+        from shapefmu.fmi.python.builder import build_fmu
+
+        fmu = build_fmu(model, out, **starts)
     else:
-        from shapefmu.fmi.native.sampled import build_native_fmu as builder
-    fmu = builder(model, out, **starts)
+        from shapefmu.fmi.native.sampled import build_native_fmu
+
+        fmu = build_native_fmu(model, out, fmi_version=fmi_version, **starts)
     ssv = write_ssv(out.with_suffix(".ssv"), starts)
     return [fmu, ssv]
 
@@ -238,4 +245,6 @@ def register(commands) -> None:
     p.add_argument("--build", metavar="OUT.fmu", type=output_file(".fmu", what="FMU"),
                    help="write the pick as a Shaper or ShapeFilter FMU (native C) and OUT.ssv beside it")
     p.add_argument("--python", action="store_true", help="with --build: the pythonfmu FMU instead of the native one")
+    p.add_argument("--fmi-version", choices=("2.0", "3.0"), default="2.0",
+                   help="with --build: FMI version of the native FMU (default 2.0; 3.0: array parameters)")
     p.set_defaults(run=_cmd_recommend)
