@@ -533,3 +533,52 @@ def test_our_master_runs_the_unsampled_fmi3_fmus_as_their_fmi2_twins(twins, sour
         scale = max(1.0, float(np.max(np.abs(two[output]))))
         np.testing.assert_allclose(three[output], two[output], rtol=0, atol=1e-12 * scale, err_msg=output)
     assert max(np.ptp(two[o]) for o in outputs) > 0
+
+
+# ---------------------------------------------------------------- Windows and ARM
+
+@pytest.mark.parametrize("platform", ["aarch64-linux", "x86_64-windows"])
+def test_the_fmi3_libraries_for_windows_and_arm_run_as_the_linux_one(twins, clocked, tmp_path, platform):
+    """hosts_c/fmi3_host.c cross-compiled (mingw-w64 for Windows, run under Wine; gcc-aarch64 for ARM,
+    under qemu) loads each FMI 3.0 FMU's library for its platform and prints the x86_64-linux rows
+    (1e-12 of their scale): every kind, a clocked one too."""
+    from fmpy import read_model_description
+
+    from shapefmu.fmi.native.compile import AARCH64, MINGW
+
+    if platform == "aarch64-linux":
+        from test_native_aarch64 import ARM_ROOT, QEMU, missing_tools
+    else:
+        from test_native_win64 import missing_tools, run_wine
+    reason = missing_tools()
+    if reason:
+        pytest.skip(reason)
+    compiler, suffix = (AARCH64, ".so") if platform == "aarch64-linux" else (MINGW, ".dll")
+    linux, cross = tmp_path / "fmi3_host", tmp_path / f"fmi3_host_cross{'.exe' if suffix == '.dll' else ''}"
+    subprocess.run(["gcc", "-O2", "-I", str(HEADERS), str(HOST3), "-o", str(linux), "-ldl", "-lm"], check=True)
+    subprocess.run([compiler, "-O2", "-I", str(HEADERS), str(HOST3), "-o", str(cross),
+                    *(["-ldl", "-lm"] if suffix == ".so" else ["-static-libgcc"])], check=True)
+    windows = (lambda path: "Z:" + str(path).replace("/", "\\")) if suffix == ".dll" else str
+    fmus = {**{name: pair[1] for name, pair in twins.items()}, "clocked shaper": clocked["shaper zvd"]}
+    for name, fmu in fmus.items():
+        folder = tmp_path / name.replace(" ", "_").replace(":", "_")
+        arguments = _host3_arguments(fmu, folder)
+        identifier = read_model_description(str(fmu)).coSimulation.modelIdentifier
+        library = Path(arguments[1]) / "binaries" / platform / f"{identifier}{suffix}"
+        clock = ["--clock", str(_clock(fmu).valueReference), repr(_interval(fmu))] if name == "clocked shaper" else []
+        options = ["--stop", "0.2", "--steps", "200", *clock, "--teardown", "atexit"]
+        native = subprocess.run([str(linux), *options, "--csv", str(folder / "linux.csv"), *arguments],
+                                capture_output=True, text=True, timeout=300)
+        assert native.returncode == 0, native.stderr[-2000:]
+        foreign = [*options, "--library", windows(library), "--csv", windows(folder / "cross.csv"), arguments[0],
+                   windows(arguments[1]), *arguments[2:]]
+        if suffix == ".dll":
+            completed = run_wine(cross, foreign, tmp_path)
+        else:
+            completed = subprocess.run([QEMU, "-L", ARM_ROOT, str(cross), *foreign], capture_output=True, text=True,
+                                       timeout=300)
+        assert completed.returncode == 0 and "atexit done" in completed.stderr, (name, completed.stderr[-2000:])
+        reference, rows = host_rows(folder / "linux.csv")[(0, 0, 0)], host_rows(folder / "cross.csv")[(0, 0, 0)]
+        assert reference.shape == rows.shape and reference.shape[0] > 200, name
+        scale = max(1.0, float(np.max(np.abs(reference))))
+        np.testing.assert_allclose(rows, reference, rtol=0, atol=1e-12 * scale, err_msg=name)

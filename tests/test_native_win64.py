@@ -48,13 +48,15 @@ def hosts(tmp_path_factory):
 
 
 def run_wine(program, plan, folder):
-    """The Windows host under Wine, headless, in a prefix of its own (created on first use)."""
+    """The Windows host under Wine, headless, in a prefix of its own (created on first use); ``plan``
+    is its one argument or a list of them."""
     wine = wine_program()
+    arguments = [plan] if isinstance(plan, str) else list(plan)
     environment = {"PATH": os.environ.get("PATH", "/usr/bin:/bin"), "HOME": str(folder),
                    "WINEPREFIX": str(folder / "wine-prefix"), "WINEDEBUG": "-all",
                    "WINEDLLOVERRIDES": "mscoree,mshtml=", "WINEARCH": "win64"}
     try:
-        return subprocess.run([wine, str(program), plan], capture_output=True, text=True, timeout=300,
+        return subprocess.run([wine, str(program), *arguments], capture_output=True, text=True, timeout=300,
                               env=environment, cwd=folder)
     finally:
         server = shutil.which("wineserver") or "/usr/lib/wine/wineserver"

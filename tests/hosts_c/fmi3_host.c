@@ -1,7 +1,9 @@
 /*
  * A small FMI 3.0 Co-Simulation host in C that behaves like the hosts we did not write (the FMI 3.0
  * twin of fmi2_host.c, with its time keeping, inputs and CSV, so the two hosts' rows of an FMI 2.0
- * FMU and of its FMI 3.0 twin compare line by line). Compiled and run by tests/test_native_fmi3.py.
+ * FMU and of its FMI 3.0 twin compare line by line). Compiled and run by tests/test_native_fmi3.py,
+ * for Linux (dlopen), and cross-compiled for Windows (LoadLibrary, run under Wine) and ARM Linux
+ * (run under qemu), so that one FMU's libraries for the three platforms run the same simulation.
  *
  *   fmi3_host [options] --fmu DIR IDENTIFIER TOKEN INPUT_VRS OUTPUT_VRS
  *
@@ -23,20 +25,35 @@
  *   --teardown MODE      normal: fmi3Terminate, fmi3FreeInstance, dlclose at the end of main;
  *                        atexit: fmi3Terminate and fmi3FreeInstance from an exit handler registered
  *                        before the FMU is loaded (so it runs after every handler the FMU registers)
+ *   --library PATH       load this library (default DIR/binaries/x86_64-linux/IDENTIFIER.so)
  *   --csv PATH           one row per communication point, after the inputs are set:
  *                        0, 0, 0, t, inputs..., outputs... (%.17g), as fmi2_host writes them
  * Any call that returns anything but fmi3OK makes the process exit with status 2 (3 from the exit
  * handler).
  */
-#include <dlfcn.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
 #include "fmi3FunctionTypes.h"
+
+#ifdef _WIN32
+#include <windows.h>
+static void *dlopen(const char *path, int flags) { (void)flags; return (void *)LoadLibraryA(path); }
+static void *dlsym(void *library, const char *name) { return (void *)GetProcAddress((HMODULE)library, name); }
+static int dlclose(void *library) { return FreeLibrary((HMODULE)library) ? 0 : 1; }
+static const char *dlerror(void) { return "LoadLibrary failed"; }
+#define RTLD_NOW 0
+#define RTLD_LOCAL 0
+#else
+#include <dlfcn.h>
+#include <unistd.h>
+#endif
+#ifndef M_PI /* -std=c99 hides it in some C libraries */
+#define M_PI 3.14159265358979323846
+#endif
 
 #define MAX_VRS 64
 #define MAX_SETS 32
@@ -110,7 +127,7 @@ static double uniform01(void)
 
 int main(int argc, char** argv)
 {
-    const char *dir = NULL, *identifier = NULL, *token = NULL, *teardown = "normal", *csv_path = NULL;
+    const char *dir = NULL, *identifier = NULL, *token = NULL, *teardown = "normal", *csv_path = NULL, *library = NULL;
     double stop = NAN, amplitude = 1.0, period = 0.05, lo = 0.0, hi = 0.0, buffer[MAX_VRS];
     long steps = 0, random_steps = 0;
     fmi3ValueReference in[MAX_VRS], out[MAX_VRS], set_vr[MAX_SETS];
@@ -135,6 +152,7 @@ int main(int argc, char** argv)
             clock_ts = atof(argv[++a]);
         }
         else if (more >= 1 && strcmp(o, "--csv") == 0) csv_path = argv[++a];
+        else if (more >= 1 && strcmp(o, "--library") == 0) library = argv[++a];
         else if (more >= 1 && strcmp(o, "--set") == 0 && n_set < MAX_SETS) {
             char* equals = strchr(argv[++a], '=');
             if (equals == NULL) return 64;
@@ -162,7 +180,8 @@ int main(int argc, char** argv)
     if (strcmp(teardown, "atexit") == 0) atexit(teardown_at_exit);
     FILE* csv = csv_path != NULL ? fopen(csv_path, "w") : NULL;
     char path[4096];
-    snprintf(path, sizeof(path), "%s/binaries/x86_64-linux/%s.so", dir, identifier);
+    if (library != NULL) snprintf(path, sizeof(path), "%s", library);
+    else snprintf(path, sizeof(path), "%s/binaries/x86_64-linux/%s.so", dir, identifier);
     if ((lib = dlopen(path, RTLD_NOW | RTLD_LOCAL)) == NULL) {
         fprintf(stderr, "FAIL dlopen %s: %s\n", path, dlerror());
         return 2;
