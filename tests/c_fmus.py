@@ -230,7 +230,7 @@ def build_typed_stair3(directory: Path, identifier: str = "TypedStair3", *, quir
     include = Path(str(resources.files("shapefmu.fmi.native") / "c"))
     return compile_fmu(HERE / "typed_stair3.c", typed_stair3_description(identifier, source=source, dependencies=dependencies),
                        identifier, Path(directory) / f"{identifier}.fmu", include, fmpy.platform_tuple,
-                       tuple(f"QUIRK_{q}" for q in quirks))
+                       tuple(f"QUIRK_{q}" for q in quirks), headers=("typed_stair_model.h", "fmi3_common.h"))
 
 
 ARRAY_GAIN3_DESCRIPTION = f"""<?xml version="1.0" encoding="UTF-8"?>
@@ -265,4 +265,4 @@ def build_array_gain3(directory: Path) -> Path:
     """The ArrayGain3 FMU (FMI 3.0 Co-Simulation with array variables, tests/fmus_c/array_gain3.c) in ``directory``."""
     include = Path(str(resources.files("shapefmu.fmi.native") / "c"))
     return compile_fmu(HERE / "array_gain3.c", ARRAY_GAIN3_DESCRIPTION, "ArrayGain3", Path(directory) / "ArrayGain3.fmu",
-                       include, fmpy.platform_tuple, headers=())
+                       include, fmpy.platform_tuple, headers=("fmi3_common.h",))

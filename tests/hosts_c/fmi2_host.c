@@ -67,6 +67,8 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "host_signals.h"
+
 typedef void* fmi2Component;
 typedef unsigned int fmi2ValueReference;
 typedef enum { fmi2OK, fmi2Warning, fmi2Discard, fmi2Error, fmi2Fatal, fmi2Pending } fmi2Status;
@@ -250,19 +252,7 @@ static double square = 1.0;
 
 static double input(double t, size_t j, double amplitude, double period)
 {
-    double phase = fmod(t, period);
-    return amplitude * (sin(2.0 * M_PI * t / period + (double)j) + (phase < 0.5 * period ? square : 0.0));
-}
-
-/* splitmix64: the same steps for the same seed on every machine. */
-static uint64_t rng_state;
-static double uniform01(void)
-{
-    uint64_t z = (rng_state += 0x9E3779B97F4A7C15ull);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    z ^= z >> 31;
-    return (double)(z >> 11) * (1.0 / 9007199254740992.0);
+    return host_input(t, j, amplitude, period, square);
 }
 
 static double now(void)

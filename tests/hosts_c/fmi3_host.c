@@ -51,9 +51,8 @@ static const char *dlerror(void) { return "LoadLibrary failed"; }
 #include <dlfcn.h>
 #include <unistd.h>
 #endif
-#ifndef M_PI /* -std=c99 hides it in some C libraries */
-#define M_PI 3.14159265358979323846
-#endif
+
+#include "host_signals.h"
 
 #define MAX_VRS 64
 #define MAX_SETS 32
@@ -111,18 +110,7 @@ static size_t parse_list(const char* text, double* values, size_t capacity)
 
 static double input(double t, size_t j, double amplitude, double period)
 {
-    double phase = fmod(t, period);
-    return amplitude * (sin(2.0 * M_PI * t / period + (double)j) + (phase < 0.5 * period ? 1.0 : 0.0));
-}
-
-static uint64_t rng_state;
-static double uniform01(void)
-{
-    uint64_t z = (rng_state += 0x9E3779B97F4A7C15ull);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    z ^= z >> 31;
-    return (double)(z >> 11) * (1.0 / 9007199254740992.0);
+    return host_input(t, j, amplitude, period, 1.0);
 }
 
 int main(int argc, char** argv)
