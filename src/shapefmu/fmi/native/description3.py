@@ -232,6 +232,9 @@ def terminals_and_icons(command_in: str | None, command_out: str | None) -> str:
             terminal = SubElement(terminals, "Terminal", {"name": name, "matchingRule": "plug", "description": text})
             SubElement(terminal, "TerminalMemberVariable",
                        {"variableName": variable, "memberName": "command", "variableKind": "signal"})
+    for node in root.iter():  # a user's text (a model's description, a table) XML 1.0 cannot hold is refused
+        for name, value in node.attrib.items():
+            check_xml_string(value, node.get("name", node.tag), f"{name} value")
     indent(root, space="  ")
     return '<?xml version="1.0" encoding="UTF-8"?>\n' + tostring(root, encoding="unicode") + "\n"
 
