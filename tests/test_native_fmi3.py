@@ -123,14 +123,16 @@ def _input_signal(fmu2):
     return signal if inputs else None
 
 
-@pytest.mark.parametrize("name", [*CASES, "plant"])
-def test_fmpy_runs_the_fmi3_fmu_as_its_fmi2_twin(twins, name):
+@pytest.mark.parametrize(("name", "interface"), [*((name, "CoSimulation") for name in CASES),
+                                                ("plant", "CoSimulation"), ("plant", "ModelExchange")])
+def test_fmpy_runs_the_fmi3_fmu_as_its_fmi2_twin(twins, name, interface):
     from fmpy import simulate_fmu
 
     fmu2, fmu3 = twins[name]
     outputs = [v.name for v in _variables(fmu2).values() if v.causality == "output"]
     starts2, starts3 = _array_set(name, fmu2)
-    options = dict(stop_time=STOP, step_size=1e-3, output_interval=1e-3, output=outputs, input=_input_signal(fmu2))
+    options = dict(stop_time=STOP, step_size=1e-3, output_interval=1e-3, output=outputs, input=_input_signal(fmu2),
+                   fmi_type=interface)
     two = simulate_fmu(str(fmu2), start_values=starts2, **options)
     three = simulate_fmu(str(fmu3), start_values=starts3, **options)
     assert len(two) == len(three) == 501
