@@ -41,7 +41,8 @@ static int build_table(Fmi2Instance *inst, Fmi3Layer *layer) {
     layer->first = calloc(n_slots + 2, sizeof(size_t));
     layer->slots = calloc(n_slots + 1, sizeof(size_t));
     layer->types = calloc(n_slots + 1, sizeof(Fmi2Type));
-    if (!group || !base || !base_length || !layer->first || !layer->slots || !layer->types) {
+    layer->scalar = calloc(n_slots + 1, sizeof(size_t));
+    if (!group || !base || !base_length || !layer->first || !layer->slots || !layer->types || !layer->scalar) {
         free(group), free(base), free(base_length);
         return -1;
     }
@@ -99,6 +100,9 @@ static int build_table(Fmi2Instance *inst, Fmi3Layer *layer) {
     /* shift: variable k (1-based) is first[k] .. first[k + 1] - 1 of slots */
     for (size_t k = 0; k <= n; k++) layer->first[k] = layer->first[k + 1];
     layer->n_variables = n;
+    layer->scalar[0] = SIZE_MAX;  /* time */
+    for (size_t k = 1; k <= n; k++)
+        layer->scalar[k] = layer->first[k] - layer->first[k - 1] == 1 ? layer->slots[layer->first[k - 1]] : SIZE_MAX;
     free(fill), free(group), free(base), free(base_length);
     return 0;
 }
@@ -156,7 +160,7 @@ static void emit(const Fmi2Instance *inst, int error, const char *category, cons
 static void *allocate(size_t count, size_t size) { return calloc(count, size); }
 
 static void free_layer(Fmi3Layer *layer) {
-    free(layer->first), free(layer->slots), free(layer->types), free(layer);
+    free(layer->first), free(layer->slots), free(layer->types), free(layer->scalar), free(layer);
 }
 
 static fmi3Instance instantiate(fmi3String name, fmi3String token, int model_exchange, int event_mode_used,
@@ -178,13 +182,14 @@ static fmi3Instance instantiate(fmi3String name, fmi3String token, int model_exc
     if (why == NULL) {
         layer->environment = environment;
         layer->log = log;
+        layer->clocked = fmi3_clocked() && !model_exchange;
         inst = core_new(name, model_exchange, logging_on, allocate, free, emit, layer);
         if (inst == NULL || build_table(inst, layer) != 0) {
             if (inst != NULL) fmu_mark_freed(inst), core_free(inst), free(inst);
             free_layer(layer);
             inst = NULL;
             why = "out of memory";
-        } else if (fmi3_clocked() && layer->period_slot == SIZE_MAX) {
+        } else if (layer->clocked && layer->period_slot == SIZE_MAX) {
             fmu_mark_freed(inst), core_free(inst), free(inst);
             free_layer(layer);
             inst = NULL;
@@ -279,21 +284,34 @@ fmi3Status fmi3Terminate(fmi3Instance instance) {
 
 /* ---------------------------------------------------------------- get / set */
 
+/* Whether the request is scalar variables of type only, one value each (the usual call: no time, no
+ * array), which every get and set checks first: then value i's slot is layer->scalar[vr[i]]. */
+static int scalars_only(const Fmi3Layer *layer, Fmi2Type type, const fmi3ValueReference vr[], size_t nvr,
+                        size_t n_values) {
+    if (nvr != n_values) return 0;
+    for (size_t i = 0; i < nvr; i++)  /* vr 0 wraps to the largest value: not a scalar here */
+        if (vr[i] - 1u >= layer->n_variables || layer->types[vr[i]] != type || layer->scalar[vr[i]] == SIZE_MAX)
+            return 0;
+    return 1;
+}
+
 #define GET_PROLOGUE(type, function)                                                                \
     ENTER(instance, AFTER_INSTANTIATION, function);                                                 \
     ENTER_ARRAY(vr, nvr, function);                                                                 \
     ENTER_ARRAY(values, nValues, function);                                                         \
-    if (check_request(inst, type, vr, nvr, nValues, 1, function) != fmi3OK) return fmi3Error;       \
-    if (inst->mode != FMI2_ERROR_STATE && model_update(inst, function) != fmi2OK) return fmi3Error; \
     const Fmi3Layer *layer = layer_of(inst);                                                        \
+    const int fast = scalars_only(layer, type, vr, nvr, nValues);                                   \
+    if (!fast && check_request(inst, type, vr, nvr, nValues, 1, function) != fmi3OK) return fmi3Error; \
+    if (inst->mode != FMI2_ERROR_STATE && model_update(inst, function) != fmi2OK) return fmi3Error; \
     size_t next = 0
 
 #define SET_PROLOGUE(type, function)                                                                \
     ENTER(instance, BEFORE_RUNNING | RUNNING, function);                                            \
     ENTER_ARRAY(vr, nvr, function);                                                                 \
     ENTER_ARRAY(values, nValues, function);                                                         \
-    if (check_request(inst, type, vr, nvr, nValues, 0, function) != fmi3OK) return fmi3Error;       \
-    const Fmi3Layer *layer = layer_of(inst)
+    const Fmi3Layer *layer = layer_of(inst);                                                        \
+    const int fast = scalars_only(layer, type, vr, nvr, nValues);                                   \
+    if (!fast && check_request(inst, type, vr, nvr, nValues, 0, function) != fmi3OK) return fmi3Error
 
 /* Each element of the request: vr[i]'s slots in order, value index `at`. */
 #define FOR_ELEMENTS(body)                                                                          \
@@ -305,6 +323,10 @@ fmi3Status fmi3Terminate(fmi3Instance instance) {
 
 fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, fmi3Float64 values[], size_t nValues) {
     GET_PROLOGUE(FMI2_REAL, "fmi3GetFloat64");
+    if (fast) {
+        for (size_t i = 0; i < nvr; i++) values[i] = inst->reals[layer->scalar[vr[i]]];
+        return fmi3OK;
+    }
     for (size_t i = 0; i < nvr; i++) {
         if (vr[i] == 0) {
             values[next++] = inst->time;
@@ -341,6 +363,12 @@ fmi3Status fmi3GetString(fmi3Instance instance, const fmi3ValueReference vr[], s
 /* Every value is checked before any is stored, so that a refused call changes nothing. */
 fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, const fmi3Float64 values[], size_t nValues) {
     SET_PROLOGUE(FMI2_REAL, "fmi3SetFloat64");
+    if (fast) {
+        for (size_t i = 0; i < nvr; i++)
+            if (core_accept_real(inst, layer->scalar[vr[i]], values[i], "fmi3SetFloat64") != fmi2OK) return fmi3Error;
+        for (size_t i = 0; i < nvr; i++) core_store_real(inst, layer->scalar[vr[i]], values[i]);
+        return fmi3OK;
+    }
     FOR_ELEMENTS(if (core_accept_real(inst, slot, values[at], "fmi3SetFloat64") != fmi2OK) return fmi3Error)
     FOR_ELEMENTS(core_store_real(inst, slot, values[at]))
     return fmi3OK;
@@ -386,7 +414,7 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoi
         return FAIL("fmi3DoStep: NULL eventHandlingNeeded, terminateSimulation, earlyReturn or lastSuccessfulTime");
     *eventHandlingNeeded = *terminateSimulation = *earlyReturn = fmi3False;
     *lastSuccessfulTime = inst->time;
-    if (!inst->model_exchange && fmi3_clock_before_step(inst, currentCommunicationPoint, communicationStepSize) != fmi3OK)
+    if (layer_of(inst)->clocked && fmi3_clock_before_step(inst, currentCommunicationPoint, communicationStepSize) != fmi3OK)
         return fmi3Error;
     if (core_do_step(inst, currentCommunicationPoint, communicationStepSize, "fmi3DoStep") != fmi2OK) return fmi3Error;
     *lastSuccessfulTime = inst->time;

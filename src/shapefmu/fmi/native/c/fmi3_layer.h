@@ -24,7 +24,9 @@ typedef struct {
     size_t *first;        /* n_variables + 1 offsets into slots: variable k's elements are */
     size_t *slots;        /* slots[first[k - 1] .. first[k] - 1] */
     Fmi2Type *types;      /* of each variable */
+    size_t *scalar;       /* of each variable: its slot if it has one element, else SIZE_MAX (the fast path) */
     size_t period_slot;   /* the sample period's slot (Ts_used, else Ts), for the clock; SIZE_MAX: none */
+    int clocked;          /* a Co-Simulation instance of an FMU built with --clock */
 } Fmi3Layer;
 
 #define ENTER(instance, allowed, function) GUARD(instance, allowed, function, fmi3Error)
