@@ -156,9 +156,9 @@ def test_a_non_finite_connection_factor_is_refused_when_read(plant_fmus, tmp_pat
     changed = text.replace(f'{key}="{2.0 if key == "factor" else 0.5}"', attribute)
     assert changed != text
     (tmp_path / "s.ssd").write_text(changed)
-    with pytest.raises(ValueError, match=rf"Connection 1: LinearTransformation {key} must be a finite number"):
+    with pytest.raises(ValueError, match=rf"Connection 1: LinearTransformation {key} must be a finite real number"):
         read_ssp(tmp_path / "s.ssd")
-    with pytest.raises(ValueError, match=rf"connection a.position -> b.voltage: {key} must be a finite number"):
+    with pytest.raises(ValueError, match=rf"connection a.position -> b.voltage: {key} must be a finite real number"):
         System().add("a", plant_fmus["disk_drive"]).add("b", plant_fmus["disk_drive"]).connect(
             "a.position", "b.voltage", **{key: float("nan")})
 

@@ -40,6 +40,7 @@ from shapefmu.fmi.archives import extract_system
 from shapefmu.fmi.ssp_targets import for_target
 from shapefmu.fmi.ssp_connectors import Connector, checked_values, elements, fmu_connectors, resolve
 from shapefmu.fmi.variable_types import KINDS
+from shapefmu.runtime.checks import check_finite
 
 SSD = "http://ssp-standard.org/SSP1/SystemStructureDescription"
 SSC = "http://ssp-standard.org/SSP1/SystemStructureCommon"
@@ -96,18 +97,6 @@ def check_component_name(name, what: str) -> str:
     return name
 
 
-def _finite(value, what: str) -> float:
-    """A finite float (a connection's factor or offset, an experiment's time), or a ValueError naming it:
-    a NaN or 1e400 would run every step with it."""
-    try:
-        number = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{what} must be a finite number, got {value!r}") from None
-    if not math.isfinite(number):
-        raise ValueError(f"{what} must be a finite number, got {value!r}")
-    return number
-
-
 def _split(reference: str, what: str) -> tuple[str, str]:
     component, dot, variable = reference.partition(".")
     if not dot or not component or not variable:
@@ -158,7 +147,7 @@ class System:
         """Connect output ``start`` ("comp.y") to input ``end`` ("comp.u"): end = factor*start + offset."""
         start_component, start_connector = _split(start, "connection start")
         end_component, end_connector = _split(end, "connection end")
-        factor, offset = (_finite(value, f"connection {start} -> {end}: {what}") for value, what in
+        factor, offset = (check_finite(value, f"connection {start} -> {end}: {what}") for value, what in
                           ((factor, "factor"), (offset, "offset")))
         connection = Connection(start_component, start_connector, end_component, end_connector, factor, offset)
         self._check_connection(connection, f"connection {start} -> {end}")
@@ -530,8 +519,8 @@ def _read_ssd(ssd: Path, origin: str, fmu_folder=None) -> System:
         factor, offset = 1.0, 0.0
         transformation = _child(item, "LinearTransformation")
         if transformation is not None:
-            factor = _finite(transformation.get("factor", 1.0), f"{where}: LinearTransformation factor")
-            offset = _finite(transformation.get("offset", 0.0), f"{where}: LinearTransformation offset")
+            factor = check_finite(transformation.get("factor", 1.0), f"{where}: LinearTransformation factor")
+            offset = check_finite(transformation.get("offset", 0.0), f"{where}: LinearTransformation offset")
         for other in item:
             if _local(other.tag) in ("MapTransformation", "BooleanMappingTransformation", "IntegerMappingTransformation"):
                 raise ValueError(f"{where}: {_local(other.tag)} is not supported (only LinearTransformation)")
@@ -541,9 +530,9 @@ def _read_ssd(ssd: Path, origin: str, fmu_folder=None) -> System:
         system.connections.append(connection)
     experiment = _child(root, "DefaultExperiment")
     if experiment is not None:
-        system.start_time = _finite(experiment.get("startTime", 0.0), f"{origin}: DefaultExperiment startTime")
+        system.start_time = check_finite(experiment.get("startTime", 0.0), f"{origin}: DefaultExperiment startTime")
         if experiment.get("stopTime") is not None:
-            system.stop_time = _finite(experiment.get("stopTime"), f"{origin}: DefaultExperiment stopTime")
+            system.stop_time = check_finite(experiment.get("stopTime"), f"{origin}: DefaultExperiment stopTime")
         system.experiment_annotations = [copy.deepcopy(a) for a in experiment if _local(a.tag) == "Annotations"]
     system.annotations = [copy.deepcopy(a) for a in root if _local(a.tag) == "Annotations"]
     system.system_annotations = [copy.deepcopy(a) for a in node if _local(a.tag) == "Annotations"]
