@@ -155,10 +155,9 @@ def _add_shape_filter(parser):
 
 def _build_shape_filter(args):
     omega, zeta = args.mode
-    starts = {"kind": args.kind, "f": omega / (2.0 * math.pi), "zeta": zeta, "adjust_Ts": args.adjust_ts}
-    given = {"order": args.order, "Ts": args.ts, "c": args.c, "base": args.base, "delta_f": args.delta_f,
-             "null": args.null, "move_time": args.move_time}
-    starts.update({name: value for name, value in given.items() if value is not None})
+    starts = {"kind": args.kind, "f": omega / (2.0 * math.pi), "zeta": zeta, "adjust_Ts": args.adjust_ts,
+              **_given(order=args.order, Ts=args.ts, c=args.c, base=args.base, delta_f=args.delta_f, null=args.null,
+                       move_time=args.move_time)}
     return [_builder(args)("ShapeFilter", Path(args.out), **starts)]
 
 
@@ -177,10 +176,14 @@ def _add_ekf_tuner(parser):
 
 
 def _build_ekf_tuner(args):
-    given = {"kind": args.kind, "n": args.n, "omega0": args.omega0, "Ts": args.ts, "amplitude": args.amplitude,
-             "retune_fraction": args.retune_fraction}
-    starts = {name: value for name, value in given.items() if value is not None}
+    starts = _given(kind=args.kind, n=args.n, omega0=args.omega0, Ts=args.ts, amplitude=args.amplitude,
+                    retune_fraction=args.retune_fraction)
     return [_builder(args)("EKFTuner", Path(args.out), **starts)]
+
+
+def _given(**options) -> dict:
+    """The options the user gave (not None): the FMU's own start values stand for the others."""
+    return {name: value for name, value in options.items() if value is not None}
 
 
 def _parameters(name: str, items) -> dict:
