@@ -382,13 +382,10 @@ def compare(plant_model, distance: float, candidates=CANDIDATES, step: float = 1
             table = _signal_table(rigid if name == "bang-bang" else optimal.command)
             sys_ = system(name).add("player", player, {"table": table}).connect("player.y_mean", command)
         elif name in _SHAPER_KINDS:
-            shaper = {"kind": _SHAPER_KINDS[name], "Ts": step, **modes}
-            if fmi_version == "3.0":
-                shaper = {**shaper, **_mode_arrays(modes, fmus.slave("Shaper"))}
-                for key in [k for k in shaper if "[" in k]:
-                    del shaper[key]
+            shaper_fmu = fmus.slave("Shaper")
+            bound = _mode_arrays(modes, shaper_fmu) if fmi_version == "3.0" else modes
             sys_ = (system(name).add("player", player, {"table": _signal_table(rigid)})
-                    .add("shaper", fmus.slave("Shaper"), shaper)
+                    .add("shaper", shaper_fmu, {"kind": _SHAPER_KINDS[name], "Ts": step, **bound})
                     .connect("player.y_mean", "shaper.u").connect("shaper.y", command))
         elif name.startswith("stos-"):
             sys_ = stos_system(plant, distance, step, fmus, u_max, shaper=name.removeprefix("stos-"))

@@ -273,7 +273,7 @@ fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean tolera
 fmi3Status fmi3ExitInitializationMode(fmi3Instance instance) {
     ENTER(instance, FMI2_INITIALIZATION, "fmi3ExitInitializationMode");
     if (core_exit_initialization(inst) != fmi2OK) return fmi3Error;
-    return fmi3_clock_start(inst, layer_of(inst)->period_slot, "fmi3ExitInitializationMode");
+    return fmi3_clock_start(inst, "fmi3ExitInitializationMode");
 }
 
 fmi3Status fmi3Terminate(fmi3Instance instance) {

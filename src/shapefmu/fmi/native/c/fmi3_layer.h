@@ -39,11 +39,12 @@ static inline Fmi3Layer *layer_of(const Fmi2Instance *inst) { return (Fmi3Layer 
  * an array). */
 int fmi3_scalar_slot(Fmi2Instance *inst, fmi3ValueReference vr, Fmi2Type type, size_t *slot, const char *function);
 
-/* The input clock (fmi3_layer_clock.c): whether this build has one; its checks at the exit of
- * initialisation (Ts is the declared interval; then Event Mode, the tick at t0), before a step and
- * before the return to Step Mode (the tick the FMU stands on was taken). */
+/* The input clock (fmi3_layer_clock.c): whether this build has one (Fmi3Layer.clocked says it for an
+ * instance); its checks at the exit of initialisation (Ts is the declared interval; then Event Mode,
+ * the tick at t0), before a step of a clocked instance and before the return to Step Mode (the tick
+ * the FMU stands on was taken). */
 int fmi3_clocked(void);
-fmi3Status fmi3_clock_start(Fmi2Instance *inst, size_t period_slot, const char *function);
+fmi3Status fmi3_clock_start(Fmi2Instance *inst, const char *function);
 fmi3Status fmi3_clock_before_step(Fmi2Instance *inst, double t, double h);
 fmi3Status fmi3_clock_before_step_mode(Fmi2Instance *inst);
 

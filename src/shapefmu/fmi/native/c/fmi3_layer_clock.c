@@ -45,8 +45,9 @@ static int on_tick(const Fmi2Instance *inst, double tau, double k) {
     return fabs(tau - (inst->start_time + k * fmi3_clock_interval)) <= CLOCK_TOLERANCE * fmi3_clock_interval;
 }
 
-fmi3Status fmi3_clock_start(Fmi2Instance *inst, size_t period_slot, const char *function) {
-    if (!fmi3_clocked() || inst->model_exchange) return fmi3OK;
+fmi3Status fmi3_clock_start(Fmi2Instance *inst, const char *function) {
+    if (!layer_of(inst)->clocked) return fmi3OK;
+    const size_t period_slot = layer_of(inst)->period_slot;
     if (model_update(inst, function) != fmi2OK) return fmi3Error;
     const double ts = inst->reals[period_slot];
     if (fabs(ts - fmi3_clock_interval) > 1e-12 * fmi3_clock_interval) {
@@ -60,7 +61,6 @@ fmi3Status fmi3_clock_start(Fmi2Instance *inst, size_t period_slot, const char *
 }
 
 fmi3Status fmi3_clock_before_step(Fmi2Instance *inst, double t, double h) {
-    if (!fmi3_clocked()) return fmi3OK;
     const double due = ticks_until(inst, t);
     if (inst->clock_ticks < due)
         return FAIL("fmi3DoStep: the clock 'sample' was not ticked at t = %.17g (enter Event Mode and call fmi3SetClock "
@@ -74,7 +74,7 @@ fmi3Status fmi3_clock_before_step(Fmi2Instance *inst, double t, double h) {
 }
 
 fmi3Status fmi3_clock_before_step_mode(Fmi2Instance *inst) {
-    if (!fmi3_clocked() || inst->clock_ticks >= ticks_until(inst, inst->time)) return fmi3OK;
+    if (!layer_of(inst)->clocked || inst->clock_ticks >= ticks_until(inst, inst->time)) return fmi3OK;
     return FAIL("fmi3EnterStepMode: t = %.17g is a tick of the clock 'sample', which was not set (fmi3SetClock) in "
                 "this Event Mode", inst->time);
 }
@@ -84,7 +84,7 @@ fmi3Status fmi3SetClock(fmi3Instance instance, const fmi3ValueReference vr[], si
     ENTER_ARRAY(vr, nvr, "fmi3SetClock");
     ENTER_ARRAY(values, nvr, "fmi3SetClock");
     for (size_t i = 0; i < nvr; i++) {
-        if (!fmi3_clocked() || vr[i] != clock_reference(inst))
+        if (!layer_of(inst)->clocked || vr[i] != clock_reference(inst))
             return FAIL("fmi3SetClock: value reference %u is no clock of this FMU", (unsigned)vr[i]);
         if (!values[i]) continue;
         const double k = ticks_until(inst, inst->time) - 1.0;
@@ -112,7 +112,7 @@ fmi3Status fmi3GetIntervalDecimal(fmi3Instance instance, const fmi3ValueReferenc
     ENTER_ARRAY(intervals, nvr, "fmi3GetIntervalDecimal");
     ENTER_ARRAY(qualifiers, nvr, "fmi3GetIntervalDecimal");
     for (size_t i = 0; i < nvr; i++) {
-        if (!fmi3_clocked() || vr[i] != clock_reference(inst))
+        if (!layer_of(inst)->clocked || vr[i] != clock_reference(inst))
             return FAIL("fmi3GetIntervalDecimal: value reference %u is no clock of this FMU", (unsigned)vr[i]);
         intervals[i] = fmi3_clock_interval;
         qualifiers[i] = fmi3IntervalUnchanged;
@@ -125,7 +125,7 @@ fmi3Status fmi3GetShiftDecimal(fmi3Instance instance, const fmi3ValueReference v
     ENTER_ARRAY(vr, nvr, "fmi3GetShiftDecimal");
     ENTER_ARRAY(shifts, nvr, "fmi3GetShiftDecimal");
     for (size_t i = 0; i < nvr; i++) {
-        if (!fmi3_clocked() || vr[i] != clock_reference(inst))
+        if (!layer_of(inst)->clocked || vr[i] != clock_reference(inst))
             return FAIL("fmi3GetShiftDecimal: value reference %u is no clock of this FMU", (unsigned)vr[i]);
         shifts[i] = 0.0;
     }

@@ -16,7 +16,7 @@
 
 fmi3Status fmi3EnterEventMode(fmi3Instance instance) {
     ENTER(instance, FMI2_EVENT_MODE | FMI2_CONTINUOUS_TIME | FMI2_STEP_COMPLETE, "fmi3EnterEventMode");
-    if (!inst->model_exchange && !fmi3_clocked())
+    if (!inst->model_exchange && !layer_of(inst)->clocked)
         return FAIL("fmi3EnterEventMode: this Co-Simulation FMU has no event mode (hasEventMode=\"false\"; build it "
                     "with --clock for one)");
     inst->mode = FMI2_EVENT_MODE;
