@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import functools
 import hashlib
 import json
 import math
@@ -129,7 +130,9 @@ class FMUCache:
         if fmi_version != "2.0" and not native:
             raise ValueError(f"fmi_version {fmi_version} needs native: the pythonfmu FMUs are FMI 2.0 only")
         self.native, self.fmi_version = native, fmi_version
+        # the slaves' subfolder; FMI 3.0 plants go with the FMI 3.0 slaves, FMI 2.0 ones at the top
         self.folder = "native3/" if fmi_version == "3.0" else "native/" if native else ""
+        self.plant_folder = "native3/" if fmi_version == "3.0" else ""
         self.directory = Path(directory)
         self.directory.mkdir(parents=True, exist_ok=True)
         self._names: dict[Path, str] = {}  # slave FMU -> the model it is
@@ -155,16 +158,12 @@ class FMUCache:
 
         fingerprint = package_name(bundled_sources(name))
         build = build_fmu
-        file_name = f"{name}.fmu"
         if self.native:
             from shapefmu.fmi.native.twins import build_native, fingerprint as native_fingerprint
 
             fingerprint += native_fingerprint(name)
-
-            def build(model, path, **starts):
-                return build_native(model, path, fmi_version=self.fmi_version, **starts)
-
-            file_name = f"{self.folder}{name}.fmu"
+            build = functools.partial(build_native, fmi_version=self.fmi_version)
+        file_name = f"{self.folder}{name}.fmu"
         if start_values:
             baked = json.dumps(start_values, sort_keys=True)
             file_name = file_name.replace(".fmu", f"_{hashlib.sha256(baked.encode()).hexdigest()[:12]}.fmu")
@@ -186,7 +185,7 @@ class FMUCache:
         digest = hashlib.sha256(b"".join(np.ascontiguousarray(m).tobytes() for m in (plant.A, plant.B)))
         digest.update(repr((plant.name, plant.inputs)).encode())
         model = measured_plant(plant)
-        return self._cached(self.folder.replace("native/", "") + fmu_file_name(model.name), digest.hexdigest(),
+        return self._cached(self.plant_folder + fmu_file_name(model.name), digest.hexdigest(),
                             lambda path: build_plant_fmu(model, path, fmi_version=self.fmi_version))
 
 
