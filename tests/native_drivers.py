@@ -1,7 +1,16 @@
-"""What the valgrind drivers of the native twins share (tests/test_native_{ekf,stos,profiles,reference}.py):
-the includes, a logger that counts errors, CHECK and REFUSED, and (TWIN_LOOKUP, for the twins whose
-model.c is a TwinVariables table) the value reference of a variable by name. Each driver is
+"""What the tests of the native twins share (tests/test_native_{ekf,stos,profiles,reference}.py): the
+variables an FMU declares, as compared with its pythonfmu twin's (``declared``); and for the valgrind
+drivers the includes, a logger that counts errors, CHECK and REFUSED, and (TWIN_LOOKUP, for the twins
+whose model.c is a TwinVariables table) the value reference of a variable by name. Each driver is
 PRELUDE [+ TWIN_LOOKUP] + its model header + its main()."""
+
+
+def declared(fmu, units: bool = True) -> list[tuple]:
+    """Each variable of ``fmu``: name, causality, variability, type, (unit,) start, sorted."""
+    from fmpy import read_model_description
+
+    return sorted((v.name, v.causality, v.variability, v.type, *((v.unit,) if units else ()), v.start)
+                  for v in read_model_description(str(fmu)).modelVariables)
 
 PRELUDE = r"""
 #include <math.h>
