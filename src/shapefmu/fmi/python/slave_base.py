@@ -38,8 +38,8 @@ How to add an FMU (one module and one registry line):
 4. ``step(self, t, h)``: advance the kernels over (t, t + h] and set the outputs. Raise ValueError
    for a step the FMU cannot honour. Inputs are already checked for NaN. Any h > 0 must be
    honoured (hosts trim their last step to 1e-16 s): a sampled FMU takes its samples on the
-   absolute grid with ``runtime.sample_clock.SampleClock`` (made in ``initialize`` with t0 =
-   ``self.time``, listed in ``kernels`` and ``state_attributes``), never by counting Ts in h.
+   grid t0 + k Ts with ``runtime.sample_clock.SampleClock`` (made in ``initialize``, listed in
+   ``kernels`` and ``state_attributes``), which counts them from the steps, never from the host's t.
 5. ``output_dependencies(self)``: after ``initialize``, ``{output: [inputs it feeds through from]}``;
    the builder writes it into ModelStructure (and InitialUnknowns).
 6. Add ``"<ModelName>": "<module>"`` to ``SLAVES`` in ``shapefmu/fmi/python/slaves/__init__.py``; then

@@ -417,6 +417,7 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoi
     if (layer_of(inst)->clocked && fmi3_clock_before_step(inst, currentCommunicationPoint, communicationStepSize) != fmi3OK)
         return fmi3Error;
     if (core_do_step(inst, currentCommunicationPoint, communicationStepSize, "fmi3DoStep") != fmi2OK) return fmi3Error;
+    fmi3_clock_after_step(inst, currentCommunicationPoint, communicationStepSize);
     *lastSuccessfulTime = inst->time;
     return fmi3OK;
 }
