@@ -104,6 +104,19 @@ class SampleClock:
         self.latched = False
         self.v = None
 
+    def state_problem(self):
+        """Why this clock, restored from an FMU state, is none a run reaches (None if it is one): its
+        period, its position on the grid (k, steps >= 0, 0 <= since < ts) and its latch."""
+        if not (isinstance(self.ts, float) and 0.0 < self.ts < math.inf):
+            return f"sample period {self.ts!r} is not > 0"
+        position = (self.k, self.since, self.steps)
+        if not (type(self.k) is int and type(self.steps) is int and isinstance(self.since, float)
+                and self.k >= 0 and self.steps >= 0 and 0.0 <= self.since < self.ts):
+            return f"position {position!r} on the grid of Ts = {self.ts!r} s is not one (k, since in [0, Ts), steps)"
+        if type(self.latched) is not bool:
+            return f"latched is {self.latched!r}, not a bool"
+        return None
+
     def current(self, u):
         """The input value of the current sample: its latched value, or ``u`` while it is open."""
         return self.v if self.latched else u
