@@ -78,7 +78,7 @@ def output_folder(text: str) -> str:
 
 
 def _check_writable(path: Path, text: str) -> None:
-    from shapefmu.cosim.output_files import check_output
+    from shapefmu.files import check_output
 
     if os.path.isdir(path) and not os.path.islink(path):  # os.path: False, not OSError, on too long a name
         raise argparse.ArgumentTypeError(f"{text!r} is a folder; give a file name")

@@ -170,8 +170,11 @@ def _print_table(advice, recordings: int) -> None:
 
 def _build(pick, out: Path, *, python: bool, fmi_version: str = "2.0") -> list[Path]:
     """The pick as a Shaper or ShapeFilter FMU (native unless ``python``; native as FMI
-    ``fmi_version``) and its .ssv parameter set."""
+    ``fmi_version``) and its .ssv parameter set, a file beside it the user did not name (so never one that exists)."""
+    from shapefmu.files import check_output
     from shapefmu.fmi.ssp import write_ssv
+
+    check_output(out.with_suffix(".ssv"), "parameter set", named=False)
 
     if pick.family == "window":
         model = "ShapeFilter"
@@ -196,7 +199,7 @@ def _build(pick, out: Path, *, python: bool, fmi_version: str = "2.0") -> list[P
         from shapefmu.fmi.native.sampled import build_native_fmu
 
         fmu = build_native_fmu(model, out, fmi_version=fmi_version, **starts)
-    ssv = write_ssv(out.with_suffix(".ssv"), starts)
+    ssv = write_ssv(out.with_suffix(".ssv"), starts, named=False)
     return [fmu, ssv]
 
 

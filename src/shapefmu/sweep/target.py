@@ -13,6 +13,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from shapefmu.files import write_bytes
 from shapefmu.runtime.checks import check_positive
 
 try:
@@ -95,8 +96,7 @@ class _SystemFile(WorkerPlugin):
         directory = os.path.join(worker.local_directory, self.name)
         os.makedirs(directory, exist_ok=True)
         path = os.path.join(directory, self.file_name)
-        with open(path, "wb") as file:
-            file.write(self.data)
+        write_bytes(path, self.data, "system file")
         _FILES[self.digest] = path
 
 

@@ -34,6 +34,7 @@ from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
 
+from shapefmu.files import write_file
 from shapefmu.fmi.compiler import run_compiler
 
 # The generic FMI layers, one of them shipped in every native FMU's sources/: the version-neutral core
@@ -223,15 +224,15 @@ def build_binaries(root: Path, identifier: str, c_files, what: str, fmi_version:
 
 
 def zip_fmu(root: Path, out_path: Path) -> Path:
-    """Zip the FMU folder ``root`` into ``out_path`` (written beside and moved, never half-written)."""
-    out_path.parent.mkdir(parents=True, exist_ok=True)
-    partial = out_path.with_name(out_path.name + ".partial")
-    with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as archive:
-        for path in sorted(root.rglob("*")):
-            if path.is_file():
-                archive.write(path, path.relative_to(root).as_posix())
-    shutil.move(partial, out_path)
-    return out_path
+    """Zip the FMU folder ``root`` into ``out_path`` (``shapefmu.files``: checked, never half-written)."""
+
+    def write(partial):
+        with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as archive:
+            for path in sorted(root.rglob("*")):
+                if path.is_file():
+                    archive.write(path, path.relative_to(root).as_posix())
+
+    return write_file(out_path, write, "FMU")
 
 
 def build_description(identifier: str, source_files) -> str:
