@@ -8,6 +8,7 @@ from __future__ import annotations
 import argparse
 import math
 import os
+import sys
 from pathlib import Path
 
 from shapefmu.shapers import KINDS
@@ -75,6 +76,11 @@ def output_folder(text: str) -> str:
         raise argparse.ArgumentTypeError(f"{text!r} is a file; give a folder")
     _check_writable(path / "_", text)
     return text
+
+
+def say_written(args, message: str) -> None:
+    """Say that a file was written: on stdout, or on stderr when ``--json`` keeps stdout for the JSON alone."""
+    print(message, file=sys.stderr if getattr(args, "json", None) is True else sys.stdout)
 
 
 def _check_writable(path: Path, text: str) -> None:

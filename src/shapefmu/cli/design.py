@@ -9,7 +9,7 @@ import math
 import numpy as np
 
 from shapefmu.analysis import insensitivity, residual_vibration, sensitivity
-from shapefmu.cli.arguments import add_design_arguments, add_sampling_arguments, output_file, parse_mode
+from shapefmu.cli.arguments import add_design_arguments, add_sampling_arguments, output_file, parse_mode, say_written
 from shapefmu.shapers import (
     KINDS,
     TWIN_PULSE_PROFILES,
@@ -108,7 +108,7 @@ def _cmd_profile(args) -> int:
     if args.plot:
         from shapefmu.plots import plot_motion_profile
 
-        print(f"profile plot written to {plot_motion_profile(profile, args.plot, title=args.kind)}")
+        say_written(args, f"profile plot written to {plot_motion_profile(profile, args.plot, title=args.kind)}")
     return 0
 
 

@@ -12,7 +12,7 @@ import math
 import sys
 from pathlib import Path
 
-from shapefmu.cli.arguments import output_file, parse_mode
+from shapefmu.cli.arguments import output_file, parse_mode, say_written
 
 AXIS_CHOICES = ("x", "y", "z", "xyz")
 # Klipper's defaults (shapefmu.identification.metrics), repeated so that --help imports no SciPy
@@ -77,7 +77,7 @@ def _cmd_identify(args) -> int:
     if args.plot:
         from shapefmu.plots import plot_identified
 
-        print(f"spectrum plot written to {plot_identified(found, args.plot)}")
+        say_written(args, f"spectrum plot written to {plot_identified(found, args.plot)}")
     return 0
 
 
