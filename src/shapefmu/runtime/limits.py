@@ -57,6 +57,15 @@ MAX_COMPONENTS = 2_000
     with the connections, so 2000 start in seconds; 10^4 took minutes before the first step. (Past
     128 components the step loop runs in Python rather than compiled: gcc's time on the generated
     loop grows faster than its length; see ``cosim.step_program``.)
+MAX_ARRAY_ELEMENTS = 1_000_000
+    Elements of one array variable of an FMU the master loads (FMI 3.0 ``<Dimension>``), checked
+    when its model description is read. The master keeps a value per element in its set and get
+    buffers and a result column per recorded element; an FMU declaring 10^8 elements took 2.9 GB and
+    two minutes before a size error, 10^18 a MemoryError. 10^6 doubles are 8 MB.
+MAX_COMPILED_VALUES = 2_000
+    Values the compiled step loop moves along connections and records, element by element, each a
+    line of its C: gcc's time grows faster than that (500 took 0.3 s, 2000 1.7 s, 10^4 over 10 s), so
+    past it the step loop runs in Python, which starts at once (``cosim.step_program``).
 MAX_MACRO_STEPS = 2**53
     Macro steps of one co-simulation run. The master computes t_k = t0 + k h from the step count k
     in double precision, exact up to 2^53; a run that long (9e15 steps: 28 years at 10^7 steps per
@@ -124,6 +133,8 @@ MAX_CONVOLUTION_PRODUCTS = 50_000_000
 MAX_PLANT_STATES = 200
 MAX_RK4_SUBSTEPS = 10_000_000
 MAX_COMPONENTS = 2_000
+MAX_ARRAY_ELEMENTS = 1_000_000
+MAX_COMPILED_VALUES = 2_000
 MAX_MACRO_STEPS = 2**53
 MAX_RESULT_BYTES = 2 * 2**30
 MAX_SWEEP_POINTS = 10_000_000
