@@ -44,7 +44,7 @@ from pathlib import Path
 import numpy as np
 
 from shapefmu.files import save_figure, write_text
-from shapefmu.runtime.checks import check_finite, check_positive
+from shapefmu.runtime.checks import check_finite, check_positive, check_size
 
 CANDIDATES = ("bang-bang", "convolution", "simultaneous", "stos-convolution", "stos-simultaneous", "ekf-tuned",
               "time-optimal")
@@ -355,6 +355,9 @@ def compare(plant_model, distance: float, candidates=CANDIDATES, step: float = 1
     u_max = check_positive(u_max, "u_max")
     modes = _modes_hz(plant)
     window = 2.0 * math.pi / min(omega for omega, _ in plant.flexible_modes())
+    # the master's bound on the run's steps, before the designs (the run lasts at least two periods)
+    check_size((2.0 * window if stop_time is None else check_positive(stop_time, "stop_time")) / step, "MAX_MACRO_STEPS",
+               f"a run by steps of {step!r} s takes at least", "macro steps", "take a longer step")
     fmus = FMUCache(cache, native=native, fmi_version=fmi_version)
     plant_fmu = fmus.plant(plant)
     rigid = rigid_bang_bang(plant, distance, u_max)

@@ -251,6 +251,9 @@ def recommend(spectra, modes, *, dampings=None, accel: float = metrics.DEFAULT_A
             f_range = (0.5 * min(m.frequency for m in modes), 2.0 * max(m.frequency for m in modes))
         else:
             f_range = (max(spectra[0].freq[0], 1.0), spectra[0].freq[-1])
+    if windows and ts > 0.5 / f_range[0]:  # a rectangle, the shortest window, needs ts <= 1 / (2 f_d)
+        raise ValueError(f"ts (--filter-ts) = {ts!r} s leaves no window filter a frequency of the scan from "
+                         f"{f_range[0]:.4g} Hz: it must be at most 1/(2 f) = {0.5 / f_range[0]:.4g} s")
     judge = _Judge(spectra, dampings, modes, accel, scv, max_smoothing)
     say = progress or (lambda text: None)
     scans: dict[tuple[str, str], list[Candidate]] = {}
