@@ -99,6 +99,10 @@ def _cmd_recommend(args) -> int:
 
     if bool(args.recording) == bool(args.mode):
         raise ValueError("give recordings or --mode HZ[:ZETA] (one or more), not both and not neither")
+    if args.build:  # the .ssv written beside the FMU, checked before the work as --build itself is
+        from shapefmu.files import check_output
+
+        check_output(Path(args.build).with_suffix(".ssv"), "parameter set", named=False)
     if args.recording:
         found = _identify_all(args)
         if not args.json:
@@ -170,11 +174,8 @@ def _print_table(advice, recordings: int) -> None:
 
 def _build(pick, out: Path, *, python: bool, fmi_version: str = "2.0") -> list[Path]:
     """The pick as a Shaper or ShapeFilter FMU (native unless ``python``; native as FMI
-    ``fmi_version``) and its .ssv parameter set, a file beside it the user did not name (so never one that exists)."""
-    from shapefmu.files import check_output
+    ``fmi_version``) and its .ssv parameter set, a file beside it the user did not name (never one that exists)."""
     from shapefmu.fmi.ssp import write_ssv
-
-    check_output(out.with_suffix(".ssv"), "parameter set", named=False)
 
     if pick.family == "window":
         model = "ShapeFilter"
