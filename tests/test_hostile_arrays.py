@@ -30,23 +30,26 @@ def gain(tmp_path_factory):
     return build_array_gain3(tmp_path_factory.mktemp("arrays"))
 
 
-def declared(gain, folder, variable, size):
-    """ArrayGain3 with ``variable`` declared an array of ``size`` elements (the binary keeps 3)."""
-    out = folder / f"{variable}_{size}.fmu"
+def declared(gain, folder, sizes, name):
+    """ArrayGain3 with its Float64 arrays declared of ``sizes`` (variable -> elements) in ``folder/name.fmu``;
+    its binary keeps 3 elements each."""
+    out = folder / f"{name}.fmu"
     with zipfile.ZipFile(gain) as source, zipfile.ZipFile(out, "w") as target:
         for item in source.infolist():
             data = source.read(item)
             if item.filename == "modelDescription.xml":
                 text = data.decode()
-                at = text.index('<Dimension start="3"/>', text.index(f'<Float64 name="{variable}" '))
-                data = (text[:at] + f'<Dimension start="{size}"/>' + text[at + len('<Dimension start="3"/>'):]).encode()
+                for variable, size in sizes.items():
+                    at = text.index('<Dimension start="3"/>', text.index(f'<Float64 name="{variable}" '))
+                    text = text[:at] + f'<Dimension start="{size}"/>' + text[at + len('<Dimension start="3"/>'):]
+                data = text.encode()
             target.writestr(item, data)
     return out
 
 
 @pytest.mark.parametrize("size", [10**8, 10**18, limits.MAX_ARRAY_ELEMENTS + 1])
 def test_an_array_past_the_bound_is_refused_when_read_in_one_line_before_any_allocation(gain, tmp_path, size):
-    ssp = System("s").add("g", declared(gain, tmp_path, "k", size)).write_ssp(tmp_path / "s.ssp")
+    ssp = System("s").add("g", declared(gain, tmp_path, {"k": size}, "k")).write_ssp(tmp_path / "s.ssp")
     tracemalloc.start()
     code, out, err = guarded(["simulate", ssp, "--stop", "1", "--step", "0.25", "--set", "g.k=[1,2,3]"], seconds=600)
     _, peak = tracemalloc.get_traced_memory()
@@ -57,7 +60,7 @@ def test_an_array_past_the_bound_is_refused_when_read_in_one_line_before_any_all
 
 
 def test_an_array_at_the_bound_is_taken(gain, tmp_path):
-    with Master(System("s").add("g", declared(gain, tmp_path, "k", limits.MAX_ARRAY_ELEMENTS)), 0.25) as master:
+    with Master(System("s").add("g", declared(gain, tmp_path, {"k": limits.MAX_ARRAY_ELEMENTS}, "k")), 0.25) as master:
         assert master.units[0].elements("k")[1][-1] == limits.MAX_ARRAY_ELEMENTS - 1
 
 
@@ -67,7 +70,7 @@ def test_recording_more_values_than_the_compiled_loop_takes_runs_the_python_loop
 
     compiled = []
     monkeypatch.setattr(step_program, "_compile", lambda *args: compiled.append(args))
-    system = System("s").add("g", declared(gain, tmp_path, "y", 10**5))
+    system = System("s").add("g", declared(gain, tmp_path, {"y": 10**5}, "y"))
     with Master(system, 0.25, record=["g.y"]) as master:
         assert master.loop_kind == "Python" and compiled == []
         assert "moves and records 100,000 values a step, more than the 2,000" in master.loop_reason

@@ -21,12 +21,12 @@ import os
 import random
 import subprocess
 import sys
-import zipfile
 from pathlib import Path
 
 import pytest
 from c_fmus import build_array_gain3
 from hostile_support import guarded
+from test_hostile_arrays import declared
 
 FUZZER = Path(__file__).resolve().parent / "state_clock_fuzzer.py"
 SHAPER = {"kind": "zvd", "n_modes": 1, "f[1]": 13.0, "zeta[1]": 0.05, "Ts": 1e-3}
@@ -76,22 +76,6 @@ def test_forged_states_and_clock_abuse_find_no_crash_and_no_silent_nan(extracted
 
 # --- the master's arrays ----------------------------------------------------------------------------
 
-def _declared(gain, folder, sizes, name):
-    """ArrayGain3 with the Float64 arrays' declared sizes replaced by ``sizes`` (variable -> size)."""
-    out = folder / f"{name}.fmu"
-    with zipfile.ZipFile(gain) as source, zipfile.ZipFile(out, "w") as target:
-        for item in source.infolist():
-            data = source.read(item)
-            if item.filename == "modelDescription.xml":
-                text = data.decode()
-                for variable, size in sizes.items():
-                    at = text.index('<Dimension start="3"/>', text.index(f'<Float64 name="{variable}" '))
-                    text = text[:at] + f'<Dimension start="{size}"/>' + text[at + len('<Dimension start="3"/>'):]
-                data = text.encode()
-            target.writestr(item, data)
-    return out
-
-
 def test_random_array_declarations_settings_and_records_run_or_refuse_in_one_line(tmp_path):
     from shapefmu.cosim import CosimError, Master
     from shapefmu.fmi.ssp import System
@@ -103,8 +87,8 @@ def test_random_array_declarations_settings_and_records_run_or_refuse_in_one_lin
               "[true,1,2]", "[1 2 3]"]
     outcomes = {"ran": 0, "refused": 0}
     for case in range(60):
-        declared = {v: rng.choice(sizes) for v in ("u", "k", "y", "x") if rng.random() < 0.5}
-        fmu = _declared(gain, tmp_path, declared, f"g{case}")
+        sizes_of = {v: rng.choice(sizes) for v in ("u", "k", "y", "x") if rng.random() < 0.5}
+        fmu = declared(gain, tmp_path, sizes_of, f"g{case}")
         parameters = {f"g.{rng.choice(['k', 'u', 'k[1]', 'k[3]', 'k[4]', 'k[0]', 'u[2]'])}": rng.choice(values)
                       for _ in range(rng.randrange(0, 3))}
         record = rng.sample(["g.y", "g.x", "g.total", "g.y[1]", "g.y[3]", "g.y[4]", "g.m2", "g.k[0]"], rng.randrange(1, 4))
