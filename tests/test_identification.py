@@ -92,39 +92,6 @@ def test_a_ring_down_is_refined_by_the_ekf_and_checked_by_the_log_decrement(tmp_
     assert abs(mode.log_decrement_zeta / 0.03 - 1) < 0.1
 
 
-def test_the_remaining_vibration_is_klippers_definition_computed_by_a_plain_loop():
-    """The vectorised metric against a per-bin, per-damping loop of its definition."""
-    freq = np.linspace(1, 150, 400)
-    psd = np.abs(syn.transmissibility([syn.SyntheticMode(40, 0.05), syn.SyntheticMode(90, 0.1, 0.3)], freq)) ** 2
-    times, amps = np.array([0.0, 0.0125, 0.025]), np.array([0.25, 0.5, 0.25])
-    meter = metrics.VibrationMeter(freq, psd, metrics.KLIPPER_DAMPINGS, max_gain=1.0)
-    fast = float(meter.remaining(metrics.residual(times[None], amps[None], meter.freq, meter.dampings).max(-1))[0])
-    threshold = psd.max() / 20
-    left = total = 0.0
-    for f, p in zip(freq, psd):
-        worst = 0.0
-        for zeta in metrics.KLIPPER_DAMPINGS:
-            w, wd = 2 * math.pi * f, 2 * math.pi * f * math.sqrt(1 - zeta**2)
-            c = sum(a * math.exp(zeta * w * t) * math.cos(wd * t) for t, a in zip(times, amps))
-            s = sum(a * math.exp(zeta * w * t) * math.sin(wd * t) for t, a in zip(times, amps))
-            worst = max(worst, math.exp(-zeta * w * times[-1]) * math.hypot(c, s) / amps.sum())
-        left += max(p * worst - threshold, 0.0)
-        total += max(p - threshold, 0.0)
-    assert fast == pytest.approx(left / total, rel=1e-9)
-
-
-def test_smoothing_and_max_accel_of_a_zv_shaper_in_closed_form():
-    """ZV at f, undamped: impulses 1/2 at 0 and 1/(2f), centre 1/(4f), d = 1/(4f) for the second:
-    s = max(sqrt 2 (v d/2 + a d^2/4), a d^2/4)."""
-    f, v, a = 50.0, 5.0, 7000.0
-    d = 1 / (4 * f)
-    times, amps = np.array([0.0, 1 / (2 * f)]), np.array([0.5, 0.5])
-    expected = max(math.sqrt(2) * (v * d / 2 + a * d * d / 4), a * d * d / 4)
-    assert float(metrics.smoothing(times, amps, a, v)) == pytest.approx(expected, rel=1e-12)
-    limit = float(metrics.max_accel(times, amps, 0.12, v))
-    assert float(metrics.smoothing(times, amps, limit, v)) == pytest.approx(0.12, rel=1e-12)
-
-
 def test_on_two_modes_the_pick_allows_more_acceleration_than_klippers_six_at_no_more_vibration(recordings):
     found = identify(recordings["two modes"][0], axis="x")
     advice = recommend([found.spectrum], found.modes.modes)

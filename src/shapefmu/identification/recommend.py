@@ -162,7 +162,7 @@ class _Judge:
         """Worst R over the spectra; ``v_of(freq)`` gives V (..., len(freq), zeta) of the batch."""
         worst = None
         for meter in self.meters:
-            r = meter.remaining(v_of(meter.freq).max(axis=-1))
+            r = meter.remaining(v_of(meter.freq))
             worst = r if worst is None else np.maximum(worst, r)
         return worst
 
