@@ -234,6 +234,16 @@ def recording_psd(recording, axis="xyz") -> Spectrum:
                     f"normalised (P / (f + 0.1), tapered below 10 Hz)")
 
 
+def judged_spectra(recording, source) -> list[Spectrum]:
+    """The spectra Klipper judges shapers on, whatever axis the test moved: of a recording's samples,
+    every recorded axis summed (``recording_psd``); of a spectrum file (``recording`` None), its psd_xyz,
+    or each of its data sets (the worst of them counts)."""
+    if recording is not None:
+        return [recording_psd(recording, "xyz")]
+    sets = read_spectrum_file(source)
+    return [sets["xyz"]] if "xyz" in sets else list(sets.values())
+
+
 @dataclass(frozen=True)
 class Fitted:
     """One frequency of Klipper's scan of a shaper and its figures (``metrics``)."""
