@@ -6,7 +6,7 @@ as a user would: identify the modes, judge every shaper family by Klipper's meas
 as a native Shaper or ShapeFilter FMU with its .ssv, and co-simulate a move through that FMU in
 shapefmu's master, driving a native plant FMU of each of the machine's modes (built from
 ``synthetic.plant_model``). The machine's response to the shaped and the unshaped move is drawn in
-results/recording_to_fmu.png, the spectrum with every candidate in results/recommendation.png.
+results/recording_to_fmu.png, the spectrum with the pick and Klipper's pick in results/recommendation.png.
 
     .venv/bin/python examples/recording_to_fmu.py
 """

@@ -184,6 +184,10 @@ def _print_table(advice, recordings: int) -> None:
           f"({pick.score / base.score:.3f} x Klipper's): {advice.verdict}")
     if pick.line:
         print(pick.line)
+    elif pick.fmu:
+        model = "ShapeFilter" if pick.family == "window" else "Shaper"
+        print(f"{model} FMU (recommend --build OUT.fmu): " + ", ".join(f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}"
+                                                                   for k, v in pick.fmu))
     else:
         print("impulses (s: amplitude): " + ", ".join(f"{t:.6f}: {a:.4f}" for t, a in zip(pick.times, pick.amplitudes)))
 

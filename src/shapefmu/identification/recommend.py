@@ -137,12 +137,17 @@ class _Rule:
         self.allowed = [float(j.vibration(np.array(reference.times)[None], np.array(reference.amplitudes)[None])[0])
                         + GUARD_DRIFT for j in self.drifted]
 
-    def guarded(self, times, amplitudes) -> bool:
-        """Guards (a) and (b) for one design (zero taps that lead a window filter are no impulses)."""
+    @staticmethod
+    def shares_kept(amplitudes) -> np.ndarray:
+        """Guard (a) per row of ``amplitudes``: no impulse below 2 % of the total (the zero taps that lead
+        a window filter's row are no impulses)."""
         amplitudes = np.asarray(amplitudes, dtype=float)
-        if amplitudes[amplitudes != 0].min() < GUARD_SHARE * amplitudes.sum():
-            return False
-        return all(float(j.vibration(np.asarray(times)[None], amplitudes[None])[0]) <= allowed
+        smallest = np.where(amplitudes != 0, amplitudes, np.inf).min(axis=-1)
+        return smallest >= GUARD_SHARE * amplitudes.sum(axis=-1)
+
+    def drift_kept(self, times, amplitudes) -> bool:
+        """Guard (b) for one design."""
+        return all(float(j.vibration(np.asarray(times)[None], np.asarray(amplitudes)[None])[0]) <= allowed
                    for j, allowed in zip(self.drifted, self.allowed))
 
     def tiers(self, vibration, accel, score) -> np.ndarray:
@@ -150,13 +155,13 @@ class _Rule:
         ref = self.reference
         return np.where((vibration <= ref.vibration) & (accel >= ref.max_accel), 0, np.where(score <= ref.score, 1, 2))
 
-    def best(self, batch: families.Batch, measures) -> tuple[int, bool]:
-        """(row, guarded) of the batch the rule prefers: in order of (tier, score), the first guarded
-        row among the first 20, else the first row, unguarded."""
+    def best(self, times, amplitudes, measures) -> tuple[int, bool]:
+        """(row, guarded) the rule prefers among designs that pass guard (a): in order of (tier, score),
+        the first that passes guard (b) among the first 20, else the first, unguarded."""
         vibration, _, accel, score = measures
         order = np.lexsort((score, self.tiers(vibration, accel, score)))
         for i in order[:20]:
-            if self.guarded(batch.times[i], batch.amplitudes[i]):
+            if self.drift_kept(times[i], amplitudes[i]):
                 return int(i), True
         return int(order[0]), False
 
@@ -186,14 +191,22 @@ def recommend(spectra, modes, *, firmware_name: str = "fmu", buildable: bool = F
     batches = _batches(firmware_name, buildable, judge, reference, modes, top, axes, ts, left_out, say)
     chosen, scored = [], 0
     for batch in batches:
-        measures = judge.measures(batch.times, batch.amplitudes)
-        scored += batch.times.shape[0]
-        row, guarded = rule.best(batch, measures)
+        kept = np.flatnonzero(rule.shares_kept(batch.amplitudes))
+        if not kept.size:  # guard (a) holds for none: not worth judging
+            left_out.append(f"{batch.kind} ({batch.family}): every design has an impulse below 2 % of the total")
+            continue
+        times, amplitudes = batch.times[kept], batch.amplitudes[kept]
+        measures = judge.measures(times, amplitudes)
+        scored += kept.size
+        row, guarded = rule.best(times, amplitudes, measures)
+        row = int(kept[row])
         amplitudes = batch.amplitudes[row] if batch.ts is None else np.trim_zeros(batch.amplitudes[row], "f")
         chosen.append(judge.candidate(batch.kind, batch.family, batch.frequencies[row], batch.zetas, batch.times[row],
                                       amplitudes, ts=None if batch.ts is None else float(batch.ts[row]),
                                       line=batch.line(row) if batch.line else None,
                                       fmu=batch.build(row) if batch.build else None, guarded=guarded))
+    if not chosen:
+        raise ValueError(f"no {firmware_name} design passes guard (a): each has an impulse below 2 % of the total")
     ranked = sorted(chosen, key=lambda c: (not c.guarded, int(rule.tiers(c.vibration, c.max_accel, c.score)), c.score))
     ranked = tuple({(c.family, c.kind): c for c in reversed(ranked)}.values())[::-1]  # the first of each kind
     ranked = tuple(sorted(ranked, key=lambda c: (not c.guarded, int(rule.tiers(c.vibration, c.max_accel, c.score)),

@@ -186,6 +186,7 @@ class _Problem:
         self.ref_smoothing = float(metrics.smoothing(self.ref_t, self.ref_a, judge.accel, judge.scv))
         self.ref_accel = float(metrics.max_accel(self.ref_t, self.ref_a, judge.max_smoothing, judge.scv))
         self.scale = np.r_[np.full(n - 1, self.duration), np.ones(n)]  # d(t, a) / dx
+        self._last = {}
         self.bounds = [(MIN_GAP, 1.0)] * (n - 1) + [(DESIGN_SHARE, 1.0)] * n
         order = np.zeros((n - 1, 2 * n - 1))
         order[0, 0] = 1.0
@@ -205,12 +206,21 @@ class _Problem:
         times, amplitudes = self.unpack(np.clip(x, [b[0] for b in self.bounds], [b[1] for b in self.bounds]))
         return times, amplitudes / amplitudes.sum()
 
+    def _costs(self, x):
+        """max_accel and smoothing with their gradients at x (SLSQP asks for them at one x in three calls)."""
+        key = x.tobytes()
+        if key not in self._last:
+            times, amplitudes = self.unpack(x)
+            self._last = {key: (_max_accel(times, amplitudes, self.judge.max_smoothing, self.judge.scv),
+                                _smoothing(times, amplitudes, self.judge.accel, self.judge.scv))}
+        return self._last[key]
+
     def _objective(self, x):
-        value, grad = _max_accel(*self.unpack(x), self.judge.max_smoothing, self.judge.scv)
+        value, grad = self._costs(x)[0]
         return -value / self.ref_accel, -grad * self.scale / self.ref_accel  # in units of the reference's
 
     def _smoothing(self, x, jacobian=False):
-        value, grad = _smoothing(*self.unpack(x), self.judge.accel, self.judge.scv)
+        value, grad = self._costs(x)[1]
         return -grad * self.scale / self.ref_smoothing if jacobian else 1 - MARGIN - value / self.ref_smoothing
 
     def _vibration(self, soft):
@@ -238,7 +248,7 @@ class _Problem:
         for soft in (self.SOFT, 0.0):
             x0 = minimize(self._objective, x0, jac=True, method="SLSQP", bounds=self.bounds,
                           constraints=[self._vibration(soft), *self.fixed],
-                          options={"maxiter": 150, "ftol": 1e-10}).x
+                          options={"maxiter": 100, "ftol": 1e-10}).x
             yield x0
 
     def meets(self, times, amplitudes) -> bool:
