@@ -168,3 +168,16 @@ def test_the_design_layer_shaper_runs_the_kernel_and_round_trips_through_json():
 def test_the_design_layer_refuses_a_kind_it_cannot_schedule():
     with pytest.raises(ValueError, match="kind must be one of zv, zvd"):
         ScheduledShaper(Schedule(*BED), ts=H, kind="simultaneous")
+
+
+def test_a_shaper_too_long_for_its_sampling_is_refused_before_its_memory_is_taken():
+    with pytest.raises(ValueError, match=r"would be 6\.283e\+09 samples long, more than the limit of 1,000,000"):
+        ModeFollowingShaper(FS, 1e-6, 0.0)
+
+
+def test_a_command_or_value_that_is_not_a_number_is_refused_naming_it():
+    kernel = ScheduledShaperKernel(FS, ModeSchedule(*BED))
+    with pytest.raises(ValueError, match="command must be a finite real number, got nan"):
+        kernel.step(math.nan, 0.0)
+    with pytest.raises(ValueError, match="scheduling value must be a finite real number, got inf"):
+        kernel.step(0.0, math.inf)

@@ -323,8 +323,9 @@ class EKFTunedShaper:
 @dataclass(frozen=True)
 class TrackedShaper:
     """A shaper of ``kind`` kept on a mode that moves by the EKF of paper 001, no calibration run:
-    the EKF watches the plant ring freely after the machine's own moves (the command at ``rest``), and
-    the shaper is re-designed for its last good estimate without a jump in the shaped command.
+    the EKF watches the plant ring freely between changes of the machine's own shaped commands (about
+    the equilibrium ``gain`` times the command; without a gain, only at ``rest``), and the shaper is
+    re-designed for its last good estimate without a jump in the shaped command.
 
     ``fs`` sampling frequency (Hz); ``omega0`` (rad/s) and ``zeta0`` the guess the shaper starts
     with; ``noise`` the standard deviation of the measurement and ``amplitude`` the scale of the rings
@@ -354,7 +355,8 @@ class TrackedShaper:
     kind: str = "zv"
     n: int = 1
     vtol: float = 0.05
-    drift: float = 2e-3
+    drift: float = 1e-3
+    gain: float | None = None
     rest: float = 0.0
     band: tuple[float, float] = (0.5, 2.0)
     zeta_max: float = 0.5
@@ -368,6 +370,6 @@ class TrackedShaper:
     def kernel(self, u0: float = 0.0) -> TrackedShaperKernel:
         """The per-sample kernel, the command resting at ``u0`` before the first sample."""
         p0, q, r = tracking_tuning(self.fs, self.omega0, self.amplitude, self.noise, self.drift)
-        return TrackedShaperKernel(self.fs, self.omega0, self.zeta0, self.kind, self.n, self.vtol, self.rest, u0,
-                                   tuple(self.band), self.zeta_max, self.resolution, p0=p0, q=q, r=r,
+        return TrackedShaperKernel(self.fs, self.omega0, self.zeta0, self.kind, self.n, self.vtol, self.gain, self.rest,
+                                   u0, tuple(self.band), self.zeta_max, self.resolution, p0=p0, q=q, r=r,
                                    omega_tol=self.omega_tol, sigma_tol=self.sigma_tol)

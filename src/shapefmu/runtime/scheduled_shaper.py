@@ -58,7 +58,7 @@ every change of the mode.
 import bisect
 import math
 
-from .checks import aliased_modes, check_finite, check_positive, check_zeta
+from .checks import aliased_modes, check_finite, check_positive, check_size, check_zeta
 from .shaper_designs import design_impulses
 from .shaper_filter import grid_impulses
 
@@ -150,8 +150,7 @@ class ModeFollowingShaper:
         self._segments = [_Segment(taps, 0, u0)]
         self._k = 0  # the index of the next sample
         self._last = u0
-        self._ring = [u0] * 1
-        self._mask = 0
+        self._ring, self._mask = [u0], 0
         self._fit(self._segments[0].reach)
 
     def _taps(self, omega, zeta):
@@ -161,6 +160,9 @@ class ModeFollowingShaper:
                              f"frequency pi*fs = {math.pi * self.fs:g} rad/s: sampled at fs = {self.fs:g} Hz no "
                              f"shaper can cancel it")
         times, amplitudes = design_impulses(self.kind, [(omega, zeta)], self.n, self.vtol)
+        # the ring of past commands holds the longest delay: bounded before it is allocated
+        check_size(times[-1] / self.h + 2.0, "MAX_SAMPLED_LENGTH", f"a {self.kind} shaper for omega = {omega:g} rad/s "
+                   f"sampled at fs = {self.fs:g} Hz would be", "samples long", "use a lower fs or a higher frequency")
         delays, weights = grid_impulses(times, amplitudes, self.h)
         self.mode = (float(omega), float(zeta))
         self.designs += 1
