@@ -227,7 +227,13 @@ def _documentation(xml: str, name: str) -> dict[str, bytes]:
             "model.png": icon_png()}
 
 
-def build_all(out_dir) -> list[Path]:
-    """Build every registered FMU with its default start values into ``out_dir``."""
+def build_all(out_dir, progress=None) -> list[Path]:
+    """Build every registered FMU with its default start values into ``out_dir``; ``progress``
+    (a function of a line of text, or None) is told as each FMU begins."""
     out_dir = Path(out_dir)
-    return [build_fmu(name, out_dir / f"{name}.fmu") for name in SLAVES]
+    built = []
+    for name in SLAVES:
+        if progress is not None:
+            progress(f"building {name}.fmu")
+        built.append(build_fmu(name, out_dir / f"{name}.fmu"))
+    return built
