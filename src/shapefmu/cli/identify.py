@@ -13,6 +13,7 @@ import sys
 from pathlib import Path
 
 from shapefmu.cli.arguments import examples, output_file, parse_mode
+from shapefmu.cli.progress import showing
 
 AXIS_CHOICES = ("x", "y", "z", "xyz")
 # Klipper's defaults (shapefmu.identification.metrics), repeated so that --help imports no SciPy
@@ -120,7 +121,8 @@ def _cmd_recommend(args) -> int:
 
         spectra = [Spectrum("--mode", "model", freq, psd, "the given modes' transmissibility, summed")]
     advice = recommend(spectra, modes, accel=args.accel, scv=args.scv, max_smoothing=args.max_smoothing,
-                       max_vibration=args.max_vibration, ts=args.filter_ts, progress=_progress())
+                       max_vibration=args.max_vibration, ts=args.filter_ts,
+                       progress=_progress() if showing(args) else None)
     if args.json:
         print(json.dumps(advice.to_json(), indent=2))
     else:

@@ -16,6 +16,8 @@ from shapefmu.cli.progress import showing
 
 
 def _cmd_sweep(args) -> int:
+    import distributed  # noqa: F401 -- the dask extra: without it, one line naming it before any work
+
     from shapefmu import sweep as sweeps
 
     system = read_system(args.system)
