@@ -20,8 +20,6 @@ def _cmd_sweep(args) -> int:
 
     from shapefmu import sweep as sweeps
 
-    system = read_system(args.system)
-    stop, step = experiment(system, args)
     if args.samples is None:
         if not args.vary or args.sample:
             raise ValueError("give the grid with --vary NAME=START:STOP:N, or --sample NAME=LOW:HIGH with --samples N")
@@ -30,12 +28,15 @@ def _cmd_sweep(args) -> int:
         if not args.sample or args.vary:
             raise ValueError("--samples N draws from the ranges of --sample NAME=LOW:HIGH (not --vary)")
         points = sweeps.random_samples(args.samples, args.sample, seed=args.seed)
-    known = _variables(system)
-    metrics, variables = sweeps.named_metrics(
-        args.metric, outputs=_matching(args.outputs, known), command=args.command_variable, after=args.after,
-        position=args.position, target=args.target, tolerance=args.tolerance)
-    record = args.record or variables
+    # The options are checked before the system is read: a wrong grid or metric is the cheaper error to
+    # report. Patterns in --outputs are expanded once the system's variables are known.
+    _metrics(args, args.outputs)
     sweeps.check_workers(args.workers, "--workers")
+    system = read_system(args.system)
+    stop, step = experiment(system, args)
+    known = _variables(system)
+    metrics, variables = _metrics(args, _matching(args.outputs, known))
+    record = args.record or variables
     for name in [*points.names, *record]:  # refused before a cluster starts: every run would fail on it
         _check_variable(name, known, system, args.system)
     # A file is sent as it is; a shipped system (its FMUs from ./fmus) as the system read.
@@ -56,6 +57,13 @@ def _cmd_sweep(args) -> int:
               file=sys.stderr)
         return 1
     return 0
+
+
+def _metrics(args, outputs):
+    from shapefmu import sweep as sweeps
+
+    return sweeps.named_metrics(args.metric, outputs=outputs, command=args.command_variable, after=args.after,
+                                position=args.position, target=args.target, tolerance=args.tolerance)
 
 
 def _variables(system) -> dict[str, set[str]]:
