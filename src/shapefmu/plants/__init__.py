@@ -5,43 +5,17 @@ input (``scheduling``) and sample-by-sample runs of them (``simulation``).
 
 Design layer: imports ``runtime`` and numpy / scipy / python-control; arrows run
 loader -> library -> model, loader -> shipped, loader -> scheduling -> model, simulation -> scheduling.
+The names below are imported on first use, so ``shapefmu plant list`` (``shipped``, standard library
+only) starts without python-control.
 """
 
-from shapefmu.plants.library import (
-    disk_drive,
-    linear_synchronous_motor,
-    mass_spring_chain,
-    pendula,
-    rigid_flexible,
-    sprung_masses,
-    ten_pendula,
-    transfer_function,
-)
-from shapefmu.plants.loader import KINDS, as_plant, describe, load, load_scheduled, loads, loads_scheduled
-from shapefmu.plants.model import Mode, Parameter, Plant, rigid_part
-from shapefmu.plants.scheduling import ModeCurve, ScheduledPlant, SchedulingInput
+from shapefmu import lazy_exports
 
-__all__ = [
-    "KINDS",
-    "Mode",
-    "ModeCurve",
-    "Parameter",
-    "Plant",
-    "ScheduledPlant",
-    "SchedulingInput",
-    "as_plant",
-    "describe",
-    "disk_drive",
-    "linear_synchronous_motor",
-    "load",
-    "load_scheduled",
-    "loads",
-    "loads_scheduled",
-    "mass_spring_chain",
-    "pendula",
-    "rigid_flexible",
-    "rigid_part",
-    "sprung_masses",
-    "ten_pendula",
-    "transfer_function",
-]
+__getattr__, __dir__, __all__ = lazy_exports(__name__, {
+    "shapefmu.plants.library": ("disk_drive", "linear_synchronous_motor", "mass_spring_chain", "pendula",
+                                "rigid_flexible", "sprung_masses", "ten_pendula", "transfer_function"),
+    "shapefmu.plants.loader": ("KINDS", "as_plant", "describe", "load", "load_scheduled", "loads",
+                               "loads_scheduled"),
+    "shapefmu.plants.model": ("Mode", "Parameter", "Plant", "rigid_part"),
+    "shapefmu.plants.scheduling": ("ModeCurve", "ScheduledPlant", "SchedulingInput"),
+})
