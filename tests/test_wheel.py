@@ -171,7 +171,7 @@ def test_the_wheel_carries_the_papers_models_and_runs_its_own_code(installed, tm
     def models(folder):
         return sorted(p.name for p in Path(folder).iterdir() if p.suffix in (".toml", ".py", ".ssd"))
 
-    assert models(where[1]) == models(ROOT / "models") and len(models(where[1])) == 8
+    assert models(where[1]) == models(ROOT / "models") and len(models(where[1])) == 10
     listing = shapefmu(installed, "plant", "list", cwd=tmp_path)
     assert "disk_drive " in listing and "ten_pendula " in listing and "disk_drive_shaped " in listing
 
@@ -182,7 +182,7 @@ def test_build_plant_show_and_compare_from_an_empty_folder_print_what_the_checko
     there.mkdir()
     for folder, python in ((here, sys.executable), (there, installed)):
         built = shapefmu(python, "build", cwd=folder)
-        assert len(re.findall(r"^built fmus/\w+\.fmu$", built, re.M)) == 13, built
+        assert len(re.findall(r"^built fmus/\w+\.fmu$", built, re.M)) == 15, built
     assert sorted(p.name for p in (there / "fmus").iterdir()) == sorted(p.name for p in (here / "fmus").iterdir())
     for arguments in (("plant", "show", "disk_drive"), ("compare", "disk_drive", "--distance", "0.05")):
         assert shapefmu(installed, *arguments, cwd=there) == shapefmu(sys.executable, *arguments, cwd=here)
