@@ -261,11 +261,11 @@ def register(commands) -> None:
                    help="what runs the shaper: klipper (its six shapers), rrf (RepRapFirmware's M593, custom "
                         "included), marlin (M593 / M493), fmu (anything shapefmu builds, default)")
     p.add_argument("--accel", type=float, default=DEFAULT_ACCEL, metavar="MM_S2",
-                   help=f"acceleration the smoothing is reported at (default {DEFAULT_ACCEL:g})")
+                   help=f"acceleration the smoothing and score are taken at, in [1, 1e6] (default {DEFAULT_ACCEL:g})")
     p.add_argument("--scv", type=float, default=DEFAULT_SCV, metavar="MM_S",
                    help=f"square-corner velocity (default {DEFAULT_SCV:g} mm/s)")
     p.add_argument("--filter-ts", type=float, default=1e-3, metavar="S",
-                   help="sampling period of the window filters judged (default 1e-3 s)")
+                   help="sampling period of the window filters judged, in [1e-5, 1e-2] (default 1e-3 s)")
     p.add_argument("--json", action="store_true",
                    help="print the pick, Klipper's pick and the candidates as JSON (stdout holds the JSON alone)")
     p.add_argument("--plot", metavar="PNG", type=output_file("plot"),

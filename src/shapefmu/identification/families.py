@@ -127,7 +127,7 @@ def design_layer(modes, zeta: float, ts: float, left_out: list) -> list[Batch]:
                              lambda i, k=kind: {"kind": k, "f[1]": float(grid[i]), "zeta[1]": zeta, "vtol": VTOL}))
     if len(modes) >= 2:  # the two strongest modes (identified modes come strongest first)
         batches += _two_modes(modes[0], modes[1], zeta, left_out)
-    return batches + _windows(low, high, zeta, ts)
+    return batches + _windows(low, high, zeta, ts, left_out)
 
 
 def _two_modes(m1, m2, zeta, left_out) -> list[Batch]:
@@ -158,7 +158,7 @@ def _two_modes(m1, m2, zeta, left_out) -> list[Batch]:
     return batches
 
 
-def _windows(low, high, zeta, ts) -> list[Batch]:
+def _windows(low, high, zeta, ts, left_out) -> list[Batch]:
     """The window filters of paper 000, a batch per filter: each row its taps as impulses at k ts (ts
     adjusted per frequency so a period holds whole samples), shorter rows led by zero taps at 0 s."""
     from shapefmu.shapers import window
@@ -176,6 +176,8 @@ def _windows(low, high, zeta, ts) -> list[Batch]:
                 continue  # too few samples per period at this frequency for this ts
             rows.append((f, np.asarray(shaper.taps, dtype=float), shaper.ts))
         if not rows:
+            left_out.append(f"{kind} (window): no frequency from {low:.1f} to {high:.1f} Hz has whole samples of "
+                            f"ts = {ts:g} s in its period")
             continue
         width = max(taps.size for _, taps, _ in rows)
         times, amplitudes = np.zeros((len(rows), width)), np.zeros((len(rows), width))

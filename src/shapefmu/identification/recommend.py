@@ -40,6 +40,8 @@ GUARD_SHARE = trains.MIN_SHARE
 GUARD_DRIFT = 0.005  # (b): 0.5 percentage points
 MODE_FREQ = (1.0, 1000.0)  # Hz: modes a recommendation is made for
 SMOOTHING_RANGE = (0.05, 10.0)  # mm: Klipper refuses a max_smoothing below 0.05
+ACCEL_RANGE = (1.0, 1e6)  # mm/s^2: where smoothing and the score are taken
+TS_RANGE = (1e-5, 1e-2)  # s: the window filters' sampling period
 
 
 @dataclass(frozen=True)
@@ -116,14 +118,15 @@ def _check(spectra, modes, firmware_name, accel, scv, max_smoothing, ts):
         if not (np.all(np.isfinite(s.psd)) and np.all(np.isfinite(s.freq))):
             raise ValueError(f"{s.source}: the spectrum holds a value that is not finite (an overflow in the recording?)")
     check_modes(modes)
-    for value, name in ((accel, "accel"), (ts, "ts")):
-        if not (math.isfinite(value) and value > 0):
-            raise ValueError(f"{name} must be a positive number, got {value!r}")
+    for value, name, (low, high), unit in ((accel, "accel (--accel)", ACCEL_RANGE, "mm/s^2"),
+                                           (ts, "the window filters' ts (--filter-ts)", TS_RANGE, "s")):
+        if not (math.isfinite(value) and low <= value <= high):
+            raise ValueError(f"{name} must be in [{low:g}, {high:g}] {unit}, got {value!r}")
     if not (math.isfinite(max_smoothing) and SMOOTHING_RANGE[0] <= max_smoothing <= SMOOTHING_RANGE[1]):
-        raise ValueError(f"max_smoothing must be in [{SMOOTHING_RANGE[0]:g}, {SMOOTHING_RANGE[1]:g}] mm (Klipper refuses "
-                         f"less than 0.05), got {max_smoothing!r}")
+        raise ValueError(f"max_smoothing (--max-smoothing) must be in [{SMOOTHING_RANGE[0]:g}, {SMOOTHING_RANGE[1]:g}] "
+                         f"mm (Klipper refuses less than 0.05), got {max_smoothing!r}")
     if not (math.isfinite(scv) and 0 <= scv <= 1000):
-        raise ValueError(f"scv must be in [0, 1000] mm/s, got {scv!r}")
+        raise ValueError(f"scv (--scv) must be in [0, 1000] mm/s, got {scv!r}")
 
 
 class _Rule:
