@@ -148,10 +148,12 @@ class _Rule:
         smallest = np.where(amplitudes != 0, amplitudes, np.inf).min(axis=-1)
         return smallest >= GUARD_SHARE * amplitudes.sum(axis=-1)
 
-    def drift_kept(self, times, amplitudes) -> bool:
-        """Guard (b) for one design."""
-        return all(float(j.vibration(np.asarray(times)[None], np.asarray(amplitudes)[None])[0]) <= allowed
-                   for j, allowed in zip(self.drifted, self.allowed))
+    def drift_kept(self, times, amplitudes) -> np.ndarray:
+        """Guard (b) per row of a batch."""
+        kept = np.ones(np.shape(times)[0], dtype=bool)
+        for judge, allowed in zip(self.drifted, self.allowed):
+            kept &= judge.vibration(times, amplitudes) <= allowed
+        return kept
 
     def tiers(self, vibration, accel, score) -> np.ndarray:
         """0: dominates Klipper's pick; 1: no worse a score; 2: worse (before the guards)."""
@@ -162,11 +164,9 @@ class _Rule:
         """(row, guarded) the rule prefers among designs that pass guard (a): in order of (tier, score),
         the first that passes guard (b) among the first 20, else the first, unguarded."""
         vibration, _, accel, score = measures
-        order = np.lexsort((score, self.tiers(vibration, accel, score)))
-        for i in order[:20]:
-            if self.drift_kept(times[i], amplitudes[i]):
-                return int(i), True
-        return int(order[0]), False
+        order = np.lexsort((score, self.tiers(vibration, accel, score)))[:20]
+        kept = np.flatnonzero(self.drift_kept(times[order], amplitudes[order]))
+        return (int(order[kept[0]]), True) if kept.size else (int(order[0]), False)
 
 
 def recommend(spectra, modes, *, firmware_name: str = "fmu", buildable: bool = False, axes=("x",),
