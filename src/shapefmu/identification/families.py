@@ -58,16 +58,23 @@ def _grid(low, high, step=SCAN_STEP):
     return np.arange(math.ceil(low / step - 1e-9), math.ceil(high / step - 1e-9)) * step
 
 
+def klipper_fmu(name: str, freq: float) -> dict | None:
+    """The Shaper FMU start values of Klipper's ``name`` at ``freq``: the design layer's zv, mzv and zvd
+    are Klipper's (the same amplitudes and times at damping 0.1); its EI fits are not."""
+    if name not in ("zv", "mzv", "zvd"):
+        return None
+    return {"kind": name, "f[1]": float(freq), "zeta[1]": klipper.DEFAULT_DAMPING_RATIO}
+
+
 def klipper_scan(top: float, axes) -> list[Batch]:
     """Klipper's six shapers from each one's lowest frequency to ``top`` Hz."""
     batches = []
     for name, shaper in klipper.SHAPERS.items():
         freqs = _grid(shaper.min_freq, top)
         times, amplitudes = _stack([shaper.impulses(f) for f in freqs])
-        build = (lambda i, f=freqs, n=name: {"kind": n, "f[1]": float(f[i]), "zeta[1]": klipper.DEFAULT_DAMPING_RATIO}
-                 if n in ("zv", "mzv", "zvd") else None)  # the design layer's zv, mzv, zvd are Klipper's
         batches.append(Batch(name, "klipper", freqs[:, None], (klipper.DEFAULT_DAMPING_RATIO,), times, amplitudes,
-                             lambda i, f=freqs, n=name: firmware.klipper_line(n, float(f[i]), axes), build))
+                             lambda i, f=freqs, n=name: firmware.klipper_line(n, float(f[i]), axes),
+                             lambda i, f=freqs, n=name: klipper_fmu(n, f[i])))
     return batches
 
 

@@ -24,7 +24,7 @@ not be designed for these modes and why.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -133,7 +133,7 @@ class _Rule:
     """The guards and the pick rule (module docstring) against Klipper's pick."""
 
     def __init__(self, judge, reference):
-        self.judge, self.reference = judge, reference
+        self.reference = reference
         self.drifted = [Judge([(f * s, p) for f, p in judge.spectra], dampings=judge.dampings, scv=judge.scv,
                               accel=judge.accel, max_smoothing=judge.max_smoothing, max_freq=judge.max_freq)
                         for s in trains.DRIFTS]
@@ -203,17 +203,17 @@ def recommend(spectra, modes, *, firmware_name: str = "fmu", buildable: bool = F
         scored += kept.size
         row, guarded = rule.best(times, amplitudes, measures)
         row = int(kept[row])
-        amplitudes = batch.amplitudes[row] if batch.ts is None else np.trim_zeros(batch.amplitudes[row], "f")
+        impulses = batch.amplitudes[row] if batch.ts is None else np.trim_zeros(batch.amplitudes[row], "f")  # or taps
         chosen.append(judge.candidate(batch.kind, batch.family, batch.frequencies[row], batch.zetas, batch.times[row],
-                                      amplitudes, ts=None if batch.ts is None else float(batch.ts[row]),
+                                      impulses, ts=None if batch.ts is None else float(batch.ts[row]),
                                       line=batch.line(row) if batch.line else None,
                                       fmu=batch.build(row) if batch.build else None, guarded=guarded))
     if not chosen:
         raise ValueError(f"no {firmware_name} design passes guard (a): each has an impulse below 2 % of the total")
-    ranked = sorted(chosen, key=lambda c: (not c.guarded, int(rule.tiers(c.vibration, c.max_accel, c.score)), c.score))
-    ranked = tuple({(c.family, c.kind): c for c in reversed(ranked)}.values())[::-1]  # the first of each kind
-    ranked = tuple(sorted(ranked, key=lambda c: (not c.guarded, int(rule.tiers(c.vibration, c.max_accel, c.score)),
-                                                 c.score)))
+    first_of_kind = {}
+    for c in sorted(chosen, key=lambda c: (not c.guarded, int(rule.tiers(c.vibration, c.max_accel, c.score)), c.score)):
+        first_of_kind.setdefault((c.family, c.kind), c)
+    ranked = tuple(first_of_kind.values())
     return Recommendation(firmware_name, ranked, ranked[0], reference, _verdict(ranked[0], reference),
                           tuple(dict.fromkeys(left_out)),
                           modes, judge.dampings, accel, scv, max_smoothing, max_freq, scored)
@@ -233,7 +233,8 @@ def _batches(target, buildable, judge, reference, modes, top, axes, ts, left_out
     """The candidates' batches for ``target`` (module docstring)."""
     train = None
     own = families.Batch(reference.kind, "klipper", np.array([reference.frequencies]), reference.zetas,
-                         np.array([reference.times]), np.array([reference.amplitudes]), lambda i: reference.line)
+                         np.array([reference.times]), np.array([reference.amplitudes]), lambda i: reference.line,
+                         lambda i: families.klipper_fmu(reference.kind, reference.frequencies[0]))
     if target == "klipper":
         say("Klipper's six shapers at every 0.1 Hz")
         return [*families.klipper_scan(top, axes), own]
@@ -255,9 +256,8 @@ def _batches(target, buildable, judge, reference, modes, top, axes, ts, left_out
     zeta = float(min(np.median([m.zeta for m in modes]), 0.5))
     say("the design layer's shapers and filters")
     batches = families.design_layer(modes, zeta, ts, left_out)
-    klipper_own = [b for b in families.klipper_scan(top, axes) if b.kind == reference.kind]
-    if buildable:
-        return batches + [replace(b, family="klipper") for b in klipper_own if b.build(0) is not None]
+    if buildable:  # Klipper's pick where an FMU holds it
+        return batches + ([own] if own.build(0) else [])
     batches.append(own)
     if train is not None:
         batches.append(families.Batch("train", "train", np.zeros((1, 0)), (), train[0][None], train[1][None]))
