@@ -2,9 +2,8 @@
 
     from shapefmu import identification as ident
     found = ident.identify("resonances_x.csv", axis="x")          # an Identified: recording, spectrum, modes
-    judged = ident.klipper.recording_psd(found.recording) if found.recording else \
-        ident.klipper.read_spectrum_file("resonances_x.csv")["xyz"]   # the spectrum as Klipper judges it
-    advice = ident.recommend([judged], found.modes.modes)          # a Recommendation: pick, Klipper's pick
+    judged = ident.klipper.judged_spectra(found.recording, "resonances_x.csv")  # as Klipper judges shapers
+    advice = ident.recommend(judged, found.modes.modes)            # a Recommendation: pick, Klipper's pick
 
 - ``recordings``: Klipper raw and processed files, RepRapFirmware M956, any CSV/Parquet table;
 - ``spectra``: Welch spectra with their settings, axes combined, Klipper's sweep excitation undone;
