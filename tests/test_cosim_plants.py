@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 import scipy.linalg
 from cosim_hosts import run_ecos, run_libcosim
-from run_watch import StderrWatch
+from run_watch import OutputWatch
 
 from shapefmu.cosim import Master, simulate
 from shapefmu.fmi.ssp import System
@@ -105,7 +105,7 @@ def test_ctrl_c_stops_a_long_run_cleanly_and_keeps_the_partial_results(disk_driv
         [sys.executable, "-m", "shapefmu", "simulate", str(ssp), "--stop", "1000", "--step", "1e-6",
          "--record", "plant.position", "--output-interval", "1e-3", "--progress", "--out", str(out)],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    watch = StderrWatch(process)
+    watch = OutputWatch(process)
     watch.wait_for("steps/s")  # start-up, then at least one progress update: not a fixed time
     process.send_signal(signal.SIGINT)
     stdout, stderr = watch.finish()

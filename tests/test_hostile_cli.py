@@ -15,7 +15,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from hostile_support import guarded
-from run_watch import StderrWatch
+from run_watch import OutputWatch
 
 from shapefmu.fmi.ssp import System
 
@@ -198,7 +198,7 @@ def test_sigterm_stops_simulate_and_saves_what_it_recorded(shaper_ssp, tmp_path)
         [sys.executable, "-m", "shapefmu", "simulate", str(shaper_ssp), "--stop", "1e4", "--step", "1e-3",
          "--output-interval", "1e-2", "--progress", "--out", str(out), "--set", "shaper.u0=0"],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    watch = StderrWatch(process)
+    watch = OutputWatch(process)
     watch.wait_for("steps/s")  # running, past its first progress update
     process.send_signal(signal.SIGTERM)
     stdout, stderr = watch.finish()

@@ -16,7 +16,7 @@ import time
 import numpy as np
 import pytest
 from hostile_support import guarded
-from run_watch import StderrWatch
+from run_watch import OutputWatch
 
 from shapefmu.cosim.output_files import output_lock
 from shapefmu.fmi.ssp import System
@@ -74,7 +74,7 @@ def test_a_signal_while_the_results_are_written_leaves_them_whole(plant_ssp, tmp
 def test_a_run_stopped_early_marks_its_file_partial_in_the_file_and_on_stderr(plant_ssp, tmp_path):
     out = tmp_path / "r.parquet"
     process = start_simulate(plant_ssp, out, "1000", "--output-interval", "1e-3", "--progress")
-    watch = StderrWatch(process)
+    watch = OutputWatch(process)
     watch.wait_for("steps/s")  # its first progress update: a first chunk of 10^4 steps is done
     process.send_signal(signal.SIGTERM)
     stdout, stderr = watch.finish()
@@ -100,7 +100,7 @@ def test_a_partial_csv_says_so_on_its_last_line(plant_ssp, workdir):
 def test_a_second_run_on_the_same_output_is_refused_while_the_first_writes(plant_ssp, tmp_path):
     out = tmp_path / "r.csv"
     first = start_simulate(plant_ssp, out, "1000", "--output-interval", "1e-3", "--progress")
-    watch = StderrWatch(first)
+    watch = OutputWatch(first)
     watch.wait_for("steps/s")  # at work, so holding the file's lock
     second = subprocess.run([sys.executable, "-m", "shapefmu", "simulate", str(plant_ssp), "--stop", "1e-3",
                              "--step", "1e-6", "--out", str(out)], capture_output=True, text=True, timeout=120)
