@@ -35,6 +35,7 @@ from pathlib import Path
 
 import pytest
 
+from support import CTYPES_HOST
 from support.valgrind import requires_valgrind
 
 H = 1e-3  # every FMU below samples at 1 ms
@@ -312,7 +313,7 @@ def test_valgrind_sees_no_invalid_access_in_the_fmu_binaries_of_a_python_host(tm
             fmu.extractall(tmp_path / name)
         directories.append(str(tmp_path / name))
     log = tmp_path / "valgrind.log"
-    driver = Path(__file__).parent / "support" / "fmi2_ctypes_host.py"
+    driver = CTYPES_HOST
     result = subprocess.run(
         ["valgrind", "--error-limit=no", "--num-callers=20", f"--log-file={log}",
          sys.executable, "-I", "-S", str(driver), ",".join(directories), "50", str(H)],

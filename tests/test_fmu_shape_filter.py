@@ -5,13 +5,13 @@ import math
 import subprocess
 import sys
 import zipfile
-from pathlib import Path
 
 import numpy as np
 import pytest
 from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
+from support import CTYPES_HOST
 from support.declarations import assert_documented, model_xml
 from support.fixtures_fmi import (
     FEEDTHROUGH_FILTER_STARTS,
@@ -34,7 +34,6 @@ from shapefmu.runtime import time_frequency as runtime_time_frequency
 from shapefmu.shapers import TWIN_PULSE_PROFILES, WINDOW_FILTERS, SampledShaper, time_frequency_profile
 
 H = 1e-3
-TESTS = Path(__file__).parent
 OMEGA = 2 * math.pi * SHAPE_FILTER_F
 
 
@@ -225,7 +224,7 @@ def test_runs_with_only_the_standard_library(shape_filter_fmu, tmp_path):
     directory = extract(str(shape_filter_fmu), str(tmp_path / "unzipped"))
     steps = 300
     result = subprocess.run(
-        [sys.executable, "-I", "-S", str(TESTS / "fmi2_ctypes_driver.py"), str(directory), str(steps), str(H)],
+        [sys.executable, "-I", "-S", str(CTYPES_HOST), str(directory), str(steps), str(H)],
         capture_output=True, text=True, timeout=60,
     )
     assert result.returncode == 0, result.stderr

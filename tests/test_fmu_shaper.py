@@ -5,13 +5,13 @@ import math
 import subprocess
 import sys
 import zipfile
-from pathlib import Path
 
 import numpy as np
 import pytest
 from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
+from support import CTYPES_HOST
 from support.declarations import assert_documented, model_xml
 from support.fixtures_fmi import MULTIMODE_STARTS, SHAPER_STARTS, command_signal
 from support.fmpy_slaves import (
@@ -25,7 +25,6 @@ from support.hosts import run_ecos, run_fmpy, run_libcosim, y_of_u
 from shapefmu.shapers import design
 
 H = 1e-3
-TESTS = Path(__file__).parent
 
 
 def _sampled_outputs(path, commands):
@@ -187,8 +186,7 @@ def test_runs_with_only_the_standard_library_and_two_builds_run_their_own_code(s
     dirs = [extract(str(p), str(tmp_path / name)) for p, name in ((shaper_fmu, "a"), (other, "b"))]
     steps = 120
     result = subprocess.run(
-        [sys.executable, "-I", "-S", str(TESTS / "support" / "fmi2_ctypes_host.py"), ",".join(map(str, dirs)), str(steps),
-         str(H)],
+        [sys.executable, "-I", "-S", str(CTYPES_HOST), ",".join(map(str, dirs)), str(steps), str(H)],
         capture_output=True, text=True, timeout=60,
     )
     assert result.returncode == 0, result.stderr

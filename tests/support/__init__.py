@@ -15,7 +15,8 @@ ecos, our C hosts, and the references the tests compare with.
     sampled_reference, ei_definition   references computed without the code under test
 
 Paths: HOSTS_C (the C hosts and drivers), FMI_HEADERS (fmpy's copy of the FMI 2.0 and 3.0 headers,
-with which the tests compile, as another tool compiles with its own), MODELS (the shipped plants).
+with which the tests compile, as another tool compiles with its own), MODELS (the shipped plants),
+CTYPES_HOST (fmi2_ctypes_host.py, an FMI 2.0 host of the standard library alone, run as a script).
 """
 
 from pathlib import Path
@@ -26,3 +27,4 @@ TESTS = Path(__file__).resolve().parent.parent
 HOSTS_C = TESTS / "hosts_c"
 FMI_HEADERS = Path(fmpy.__file__).parent / "c-code"
 MODELS = TESTS.parent / "models"
+CTYPES_HOST = TESTS / "support" / "fmi2_ctypes_host.py"

@@ -25,8 +25,9 @@ from pathlib import Path
 import numpy as np
 from fmpy import read_model_description
 
-from shapefmu.cosim.peer_hosts import tbb_library
 from support.fmpy_slaves import configured
+
+from shapefmu.cosim.peer_hosts import tbb_library
 
 
 def _plan(fmu, outputs):

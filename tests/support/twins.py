@@ -29,6 +29,7 @@ from typing import Callable
 
 import numpy as np
 import pytest
+
 from support.fixtures_fmi import EKF_STARTS, STOS_STARTS, time_optimal_solution
 from support.fmpy_slaves import initialised, run_points
 from support.scenarios import EKF_OUTPUTS, OMEGA, SETTLE, TARGET, TS, U, ekf_signals, plant_step, recorded_measurements
@@ -163,7 +164,7 @@ def _omega_moved(rows) -> None:
 
 class EKFTunerTwin(Twin):
     """Paper 001's EKF-tuned shaper: a noisy 10 Hz ring-down watched at 1 kHz from a 60 rad/s guess.
-    Not bit for bit (the EKF's matrix products sum in another order in C): to 1e-12 of each output's range."""
+    Held to 1e-12 of each output's range (not bit for bit), as its tests always held it."""
 
     model = "EKFTuner"
     outputs = tuple(EKF_OUTPUTS)
@@ -173,7 +174,7 @@ class EKFTunerTwin(Twin):
     steps_of_ts = (Run("tuner", steps_of(H, 2500), _ekf_inputs(0), check=_tuned),)
     hosts = Run("tuner", steps_of(H, 800), _ekf_inputs(1))
     random = (Run("tuner", random_times(7, 1500, lambda rng, n: rng.choice([0.3, 0.5, 1.0, 1.7, 2.5], size=n) * 1e-3,
-                                        13, 1e-12), _ekf_inputs(5), check=_converged),)
+                                        13, 1e-12), _ekf_inputs(5), check=_converged),)  # steps of 0.3 to 2.5 Ts
     changes = (Run("tuner", steps_of(2e-3, 1200), _ekf_inputs(3), check=_converged,
                    parameters={"kind": "mzv", "omega0": 2 * math.pi * 8.0, "Ts": 2e-3, "retune_fraction": 0.02}),)
     # random steps (a third onto the grid), a 20 Hz vibration the EKF locks on to (the host's inputs)
