@@ -1,6 +1,6 @@
 """Every FMU answers any step a host chooses: sampled FMUs take their samples on t0 + k Ts.
 
-Driven by our C host (hosts_c/fmi2_host.c, run by c_host.py) the way the FMU compliance checker
+Driven by our C host (hosts_c/fmi2_host.c, run by tests/support/c_hosts.py) the way the FMU compliance checker
 (fmuCheck) and OMSimulator drive an FMU: time kept as ``t += h`` with the last step trimmed onto the
 stop time (after 2000 steps of 1 ms towards 2 s the last step is 1.1e-13 s), steps of stop/500
 (fmuCheck's default), random steps from 1e-9 Ts to 7.3 Ts. Every FMU that ``shapefmu build``
