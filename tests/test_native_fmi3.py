@@ -21,11 +21,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from support import HOSTS_C, MODELS
 from support.c_hosts import fmi3_arguments, fmu_arguments, host_rows, run_host
 from support.cross_platform import PLATFORMS, missing_tools, windows_path
 from support.fixtures_native import FILTERS, ONE_MODE, TWO_MODES, shaper_starts
-from support import MODELS
-from support.valgrind import HOSTS_C, assert_clean_under_memcheck, requires_valgrind
+from support.valgrind import assert_clean_under_memcheck, requires_valgrind
 
 STOP = 0.5
 

@@ -4,10 +4,11 @@
     Builds.pythonfmu(model, **start_values) -> Path        shapefmu.fmi.build_fmu
     Builds.native(model, fmi_version="2.0", clock=False, **start_values) -> Path
                                                             shapefmu.fmi.native.twins.build_native
-    Builds.plant(model_file, fmi_version="2.0") -> Path    shapefmu.fmi.native.build_plant_fmu
+    Builds.plant(model_file, fmi_version="2.0") -> Path    shapefmu.fmi.native.build_plant_fmu (a .toml or .py model)
     Builds.many({key: (method, args, kwargs)}) -> {key: Path}: several at once, two compiling at a time
 
-A native build is three C compilations (linux64, win64, aarch64) in subprocesses, so two run side by
+Each FMU has a file name of its own (model-N.fmu), as hosts that extract by name expect. A native
+build is three C compilations (linux64, win64, aarch64) in subprocesses, so two run side by
 side; pythonfmu builds run one at a time, in the caller's thread.
 """
 
@@ -44,16 +45,18 @@ class Builds:
 
         def build(folder):
             folder.mkdir()
-            return build_native(model, folder / f"{model}.fmu", fmi_version=fmi_version, clock=clock, **start_values)
+            return build_native(model, folder / f"{model}-{folder.name}.fmu", fmi_version=fmi_version, clock=clock,
+                                **start_values)
 
         return self._submit(self._key("native", model, fmi_version, clock, **start_values), build)
 
     def _plant_future(self, model_file, fmi_version: str = "2.0") -> Future:
-        from shapefmu.fmi.native import build_plant_fmu
+        from shapefmu.fmi.native import build_plant_fmu, model_from_file
 
         def build(folder):
             folder.mkdir()
-            return build_plant_fmu(str(model_file), folder / f"{Path(model_file).stem}.fmu", fmi_version=fmi_version)
+            return build_plant_fmu(model_from_file(str(model_file)), folder / f"{Path(model_file).stem}-{folder.name}.fmu",
+                                   fmi_version=fmi_version)
 
         return self._submit(self._key("plant", str(Path(model_file).resolve()), fmi_version), build)
 
@@ -74,7 +77,7 @@ class Builds:
                 folder = self.folder / f"{len(self._futures)}"
                 folder.mkdir()
                 done = Future()
-                done.set_result(build_fmu(model, folder / f"{model}.fmu", **start_values))
+                done.set_result(build_fmu(model, folder / f"{model}-{folder.name}.fmu", **start_values))
                 with self._lock:
                     self._futures[key] = done
         return done.result()
