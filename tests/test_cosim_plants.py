@@ -9,8 +9,8 @@ import sys
 import numpy as np
 import pytest
 import scipy.linalg
-from cosim_hosts import run_ecos, run_libcosim
-from run_watch import OutputWatch
+from support.run_watch import OutputWatch
+from support.ssp_hosts import run_ecos, run_libcosim
 
 from shapefmu.cosim import Master, simulate
 from shapefmu.fmi.ssp import System

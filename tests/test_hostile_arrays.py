@@ -17,7 +17,7 @@ import tracemalloc
 import zipfile
 
 import pytest
-from c_fmus import build_array_gain3
+from support.c_fmus import build_array_gain3
 from hostile_support import guarded
 
 from shapefmu.cosim import Master

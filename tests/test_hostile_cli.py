@@ -15,7 +15,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from hostile_support import guarded
-from run_watch import OutputWatch
+from support.run_watch import OutputWatch
 
 from shapefmu.fmi.ssp import System
 

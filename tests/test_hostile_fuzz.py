@@ -24,7 +24,7 @@ import sys
 from pathlib import Path
 
 import pytest
-from c_fmus import build_array_gain3
+from support.c_fmus import build_array_gain3
 from hostile_support import guarded
 from test_hostile_arrays import declared
 

@@ -16,7 +16,7 @@ import time
 import numpy as np
 import pytest
 from hostile_support import guarded
-from run_watch import OutputWatch
+from support.run_watch import OutputWatch
 
 from shapefmu.cosim.output_files import output_lock
 from shapefmu.fmi.ssp import System

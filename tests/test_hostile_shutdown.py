@@ -18,7 +18,7 @@ import zipfile
 from pathlib import Path
 
 import pytest
-from run_watch import OutputWatch
+from support.run_watch import OutputWatch
 
 SPECTRUM = Path(__file__).resolve().parent / "data" / "recordings" / "v24_resonances_x_20230306_224517.csv"
 

@@ -29,7 +29,7 @@ from fractions import Fraction
 
 import numpy as np
 import pytest
-from sampled_reference import SampledRun
+from support.sampled_reference import SampledRun
 
 from shapefmu.runtime import shaper_designs
 from shapefmu.runtime.shaper_filter import grid_impulses

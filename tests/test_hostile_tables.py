@@ -65,10 +65,10 @@ def test_a_table_of_other_than_numbers_or_overflowing_is_one_line_naming_the_key
 
 def _played(path, steps):
     """(y, y_mean) after each step (t, h) of ``steps``, fmpy driving the FMU."""
-    from fmu_drivers import fmpy_slave, variable_references
+    from support.fmpy_slaves import instantiated, variable_references
 
     vr = variable_references(path)
-    slave = fmpy_slave(path)
+    slave = instantiated(path)
     slave.setupExperiment(startTime=steps[0][0])
     slave.enterInitializationMode()
     slave.exitInitializationMode()
