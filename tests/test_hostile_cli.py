@@ -4,6 +4,7 @@ time. Table-driven per command (design, plant, optimal, stos, build, simulate, s
 for the numbers of design and simulate, and SIGTERM to a running simulate, which saves its results."""
 
 import math
+import shutil
 import signal
 import subprocess
 import sys
@@ -25,8 +26,11 @@ DISK = str(MODELS / "disk_drive.toml")
 
 @pytest.fixture(scope="module")
 def shaper_ssp(tmp_path_factory, shaper_fmu):
-    """The ZV Shaper FMU of fixtures_fmi (10 Hz, Ts = 1 ms) alone in a system."""
-    return System("alone").add("shaper", shaper_fmu).write_ssp(tmp_path_factory.mktemp("cli_alone") / "alone.ssp")
+    """The ZV Shaper FMU of fixtures_fmi (10 Hz, Ts = 1 ms) alone in a system, as Shaper.fmu."""
+    folder = tmp_path_factory.mktemp("cli_alone")
+    fmu = folder / "Shaper.fmu"
+    shutil.copy(shaper_fmu, fmu)  # the session's build has a file name of its own
+    return System("alone").add("shaper", fmu).write_ssp(folder / "alone.ssp")
 
 
 def assert_refused(argv, code, words, workdir):

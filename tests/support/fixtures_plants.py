@@ -1,6 +1,6 @@
 """Session-scoped fixtures for the plant FMUs (see conftest.py).
 
-Every plant of models/ (the five TOML plants and the nonlinear pendulum of models/pendulum.py) is
+Every plant of models/ (the seven TOML plants and the nonlinear pendulum of models/pendulum.py) is
 generated and compiled once per test session into a temporary directory.
 """
 
@@ -9,6 +9,8 @@ import pytest
 from support import MODELS
 # The linear plants of models/*.toml, by model name.
 LINEAR_PLANTS = ("disk_drive", "disk_drive_back_emf", "linear_synchronous_motor", "ten_pendula", "mass_spring_chain")
+# The plants whose modes move with a scheduling input (built at its start value until their FMUs take it).
+SCHEDULED_PLANTS = ("printer_bed", "gantry_crane")
 
 
 @pytest.fixture(scope="session")
