@@ -8,8 +8,6 @@ import shutil
 import signal
 import subprocess
 import sys
-import threading
-import time
 from pathlib import Path
 
 import numpy as np
@@ -18,6 +16,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from hostile_support import guarded
+from support.run_watch import OutputWatch
 
 from shapefmu.fmi.ssp import System
 
@@ -203,18 +202,10 @@ def test_sigterm_stops_simulate_and_saves_what_it_recorded(shaper_ssp, tmp_path)
         [sys.executable, "-m", "shapefmu", "simulate", str(shaper_ssp), "--stop", "1e4", "--step", "1e-3",
          "--output-interval", "1e-2", "--progress", "--out", str(out), "--set", "shaper.u0=0"],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    seen = []
-    reader = threading.Thread(target=lambda: seen.extend(iter(lambda: process.stderr.read(1), "")), daemon=True)
-    reader.start()
-    deadline = time.monotonic() + 60
-    while "steps/s" not in "".join(seen) and time.monotonic() < deadline and process.poll() is None:
-        time.sleep(0.05)
-    assert "steps/s" in "".join(seen), "".join(seen)  # running, past its first progress update
+    watch = OutputWatch(process)
+    watch.wait_for("steps/s")  # running, past its first progress update
     process.send_signal(signal.SIGTERM)
-    stdout = process.stdout.read()  # stderr stays the reader thread's alone: two readers would split it
-    process.wait(timeout=60)
-    reader.join(timeout=10)
-    stderr = "".join(seen)
+    stdout, stderr = watch.finish()
     assert process.returncode == 143, stderr
     assert "shapefmu simulate: co-simulation interrupted at t = " in stderr and "(SIGTERM)" in stderr
     assert "Traceback" not in stderr
