@@ -175,7 +175,7 @@ def _cmd_compare(args) -> int:
 
 
 def _add_write_ssp(parser, fold: bool) -> None:
-    from shapefmu.fmi.ssp_targets import TARGETS
+    from shapefmu.fmi.ssp.targets import TARGETS
 
     parser.add_argument("--write-ssp", metavar="FILE", type=output_file(".ssp", ".ssd", what="SSP file"),
                         help="also write the system run, with its experiment: .ssp (FMUs inside) or .ssd")

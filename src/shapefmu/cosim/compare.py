@@ -433,7 +433,7 @@ def compare(plant_model, distance: float, candidates=CANDIDATES, step: float = 1
 def _baked_in(system, fmus: FMUCache, strings_only: bool):
     """``system`` with each slave's bindings baked into a copy of its FMU as start values: the
     String ones, removed from the bindings, for OMSimulator, which imports no String binding (see
-    :mod:`shapefmu.fmi.ssp_targets`); every one, the bindings kept, for a native twin, which
+    :mod:`shapefmu.fmi.ssp.targets`); every one, the bindings kept, for a native twin, which
     designs at build time and refuses another value than its build value."""
     result = copy.copy(system)
     result.components = {}
