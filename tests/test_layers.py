@@ -18,7 +18,7 @@ LAYERS = {
     "shapers": 1, "analysis": 1, "estimation": 1, "stos": 1, "optimal": 1, "plants": 1, "plots": 1, "identification": 1,
     "fmi": 2,
     "cosim": 3,
-    "sweep": 4,
+    "sweep": 4, "compare": 4,
     "cli": 5, "__main__": 5,
 }
 LONGEST_MODULE = 600  # lines; DESIGN.md: past ~600 lines a room is usually two rooms

@@ -159,7 +159,7 @@ def _print_fmu_warnings(master) -> None:
 
 
 def _cmd_compare(args) -> int:
-    from shapefmu.cosim.compare import compare
+    from shapefmu.compare import compare
 
     if args.target is not None and args.write_ssp is None:
         raise ValueError("--target applies to --write-ssp FILE, which is not given")
@@ -205,7 +205,7 @@ def register(commands) -> None:
     _add_write_ssp(p, fold=True)
     p.set_defaults(run=_cmd_simulate)
 
-    from shapefmu.cosim.compare import CANDIDATES
+    from shapefmu.compare import CANDIDATES
 
     p = commands.add_parser("compare", help="one plant, every candidate command, co-simulated as FMUs side by side")
     p.add_argument("file", help="plant model in the form of eq. (1) of paper 002, e.g. models/disk_drive.toml or disk_drive")

@@ -33,209 +33,21 @@ which STOS needs; the same FMU drives every candidate, so they all meet the same
 
 from __future__ import annotations
 
-import copy
 import dataclasses
-import functools
-import hashlib
-import json
 import math
 from pathlib import Path
 
 import numpy as np
 
+from shapefmu.compare.cache import FMUCache
+from shapefmu.compare.metrics import MoveMetrics, move_metrics
+from shapefmu.compare.plot import plot_compare
+from shapefmu.compare.systems import (SHAPER_KINDS, baked_in, ekf_tuned_moves, ekf_tuned_system, mode_arrays, modes_hz,
+                                      signal_table, stos_system)
 from shapefmu.runtime.checks import check_finite, check_positive
 
 CANDIDATES = ("bang-bang", "convolution", "simultaneous", "stos-convolution", "stos-simultaneous", "ekf-tuned",
               "time-optimal")
-# Shaper FMU kind per shaper method: "zv" given several modes convolves one ZV per mode.
-_SHAPER_KINDS = {"convolution": "zv", "simultaneous": "simultaneous"}
-_SETTLE_KEYS = ("kp", "kd", "ki", "x_enter", "v_enter", "x_exit", "v_exit")
-
-
-# ---------------------------------------------------------------------------------------------
-# The plant FMU with a velocity output
-
-
-def measured_plant(plant):
-    """A plant of paper 002's eq. (1) form as a native plant model whose outputs are ``position``,
-    ``velocity`` (the rigid-body x_r', which a STOS controller measures) and ``deflection_i``.
-
-    The plant's own model file exposes no velocity, and a ``Plant`` with an extra row in C becomes
-    the plant generator's generic state-space kind, whose tunable D makes every output depend on the input
-    (an algebraic loop with a feed-through controller). This model is written symbolically in the
-    physical parameters instead (``b2``, ``rigid_damping``, ``f[i]`` in Hz, ``zeta[i]``, ``b4[i]``,
-    the names the model files give), so its outputs depend on the states only; it is linear, and
-    the generated plant steps it by the exact zero-order hold.
-    """
-    import casadi as ca
-
-    from shapefmu.fmi.native import Output, Variable
-    from shapefmu.plants import as_plant
-    from shapefmu.stos import rigid_body
-
-    plant = as_plant(plant)
-    b, damping = rigid_body(plant)
-    x_r, v_r, voltage = ca.SX.sym("x_r"), ca.SX.sym("v_r"), ca.SX.sym(plant.inputs[0])
-    b2, d = ca.SX.sym("b2"), ca.SX.sym("rigid_damping")
-    states = [Variable("x_r", x_r), Variable("v_r", v_r)]
-    derivatives = [v_r, -d * v_r + b2 * voltage]
-    parameters = [Variable("b2", b2, b, "1/(V*s^2)", "nonzero", "rigid-body input gain"),
-                  Variable("rigid_damping", d, damping, "1/s", "nonnegative", "rigid-body velocity damping")]
-    outputs = [Output("position", x_r), Output("velocity", v_r)]
-    for i, k in enumerate(range(2, plant.n_states, 2), start=1):
-        omega = math.sqrt(-plant.A[k + 1, k])
-        x, v = ca.SX.sym(f"x_f{i}"), ca.SX.sym(f"v_f{i}")
-        f, zeta, b4 = ca.SX.sym(f"f[{i}]"), ca.SX.sym(f"zeta[{i}]"), ca.SX.sym(f"b4[{i}]")
-        w = 2.0 * math.pi * f
-        states += [Variable(f"x_f{i}", x), Variable(f"v_f{i}", v)]
-        derivatives += [v, -w * w * x - 2.0 * zeta * w * v + b4 * voltage]
-        parameters += [Variable(f"f[{i}]", f, omega / (2.0 * math.pi), "Hz", "positive", f"frequency of mode {i}"),
-                       Variable(f"zeta[{i}]", zeta, -plant.A[k + 1, k + 1] / (2.0 * omega), "1", "damping_ratio",
-                                f"damping ratio of mode {i}"),
-                       Variable(f"b4[{i}]", b4, float(plant.B[k + 1, 0]), "1/(V*s^2)", "any", f"modal gain of mode {i}")]
-        outputs.append(Output(f"deflection_{i}", x))
-    return _linear_symbolic_plant(name=f"{plant.name}_measured", description=f"{plant.name} with its rigid-body velocity measured",
-                                  states=tuple(states), derivatives=tuple(derivatives),
-                                  inputs=(Variable(plant.inputs[0], voltage),), parameters=tuple(parameters),
-                                  outputs=tuple(outputs))
-
-
-def _linear_symbolic_plant(**fields):
-    """A plant-generator ``NonlinearPlant`` whose equations are linear in x and u, built with the exact
-    zero-order-hold step (and no RK4 substep parameter) like the linear model files."""
-    from shapefmu.fmi.native import NonlinearPlant
-
-    class LinearSymbolicPlant(NonlinearPlant):
-        def model_part(self):
-            part = super().model_part()
-            return dataclasses.replace(part, linear=True, substep_parameter=None,
-                                       parameters=tuple(p for p in part.parameters if p.name != "substep"))
-
-    return LinearSymbolicPlant(**fields)
-
-
-# ---------------------------------------------------------------------------------------------
-# FMU cache
-
-
-class FMUCache:
-    """A folder of FMUs built on demand: the slaves with default start values (parameters are bound
-    per system) and measured plants. A file is rebuilt when its fingerprint (the slave's bundled
-    sources, or the plant's matrices) differs from the one recorded in ``fingerprints.json``.
-    With ``native`` the slaves are their native C twins (``shapefmu.fmi.native.twins``), in the
-    subfolder ``native/``; with ``fmi_version`` "3.0" the twins and the plants are FMI 3.0 FMUs, in
-    ``native3/``."""
-
-    def __init__(self, directory, native: bool = False, fmi_version: str = "2.0"):
-        if fmi_version != "2.0" and not native:
-            raise ValueError(f"fmi_version {fmi_version} needs native: the pythonfmu FMUs are FMI 2.0 only")
-        self.native, self.fmi_version = native, fmi_version
-        # the slaves' subfolder; FMI 3.0 plants go with the FMI 3.0 slaves, FMI 2.0 ones at the top
-        self.folder = "native3/" if fmi_version == "3.0" else "native/" if native else ""
-        self.plant_folder = "native3/" if fmi_version == "3.0" else ""
-        self.directory = Path(directory)
-        self.directory.mkdir(parents=True, exist_ok=True)
-        self._names: dict[Path, str] = {}  # slave FMU -> the model it is
-        self._stamps_path = self.directory / "fingerprints.json"
-        try:
-            self._stamps = json.loads(self._stamps_path.read_text())
-        except (OSError, ValueError):
-            self._stamps = {}
-
-    def _cached(self, file_name: str, fingerprint: str, build) -> Path:
-        path = self.directory / file_name
-        if not (path.is_file() and self._stamps.get(file_name) == fingerprint):
-            path.parent.mkdir(exist_ok=True)
-            build(path)
-            self._stamps[file_name] = fingerprint
-            self._stamps_path.write_text(json.dumps(self._stamps, indent=1, sort_keys=True))
-        return path
-
-    def slave(self, name: str, **start_values) -> Path:
-        """``<name>.fmu`` for a slave of ``shapefmu.fmi.python.slaves`` (e.g. "Shaper", "STOSController");
-        with ``start_values``, a copy with those baked in, ``<name>_<digest>.fmu``."""
-        from shapefmu.fmi.python.builder import build_fmu, bundled_sources, package_name
-
-        fingerprint = package_name(bundled_sources(name))
-        build = build_fmu
-        if self.native:
-            from shapefmu.fmi.native.twins import build_native, fingerprint as native_fingerprint
-
-            fingerprint += native_fingerprint(name)
-            build = functools.partial(build_native, fmi_version=self.fmi_version)
-        file_name = f"{self.folder}{name}.fmu"
-        if start_values:
-            baked = json.dumps(start_values, sort_keys=True)
-            file_name = file_name.replace(".fmu", f"_{hashlib.sha256(baked.encode()).hexdigest()[:12]}.fmu")
-            fingerprint += baked
-        path = self._cached(file_name, fingerprint, lambda path: build(name, path, **elements(start_values)))
-        self._names[path.resolve()] = name
-        return path
-
-    def model_of(self, fmu: Path) -> str | None:
-        """The model name of a slave FMU this cache built, None for any other FMU (a plant)."""
-        return self._names.get(Path(fmu).resolve())
-
-    def plant(self, plant) -> Path:
-        """The measured plant FMU (``measured_plant``) of a Plant or model file, e.g. DiskDriveMeasured.fmu."""
-        from shapefmu.fmi.native import build_plant_fmu, fmu_file_name
-        from shapefmu.plants import as_plant
-
-        plant = as_plant(plant)
-        digest = hashlib.sha256(b"".join(np.ascontiguousarray(m).tobytes() for m in (plant.A, plant.B)))
-        digest.update(repr((plant.name, plant.inputs)).encode())
-        model = measured_plant(plant)
-        return self._cached(self.plant_folder + fmu_file_name(model.name), digest.hexdigest(),
-                            lambda path: build_plant_fmu(model, path, fmi_version=self.fmi_version))
-
-
-def elements(values: dict) -> dict:
-    """``values`` with each array value (an FMI 3.0 array parameter, a list) as its elements
-    ``name[1]``, ``name[2]``, ...: the start values a twin is built from name elements."""
-    flat = {}
-    for name, value in values.items():
-        if isinstance(value, (list, tuple)):
-            flat.update({f"{name}[{i}]": item for i, item in enumerate(value, start=1)})
-        else:
-            flat[name] = value
-    return flat
-
-
-# ---------------------------------------------------------------------------------------------
-# Metrics
-
-
-@dataclasses.dataclass(frozen=True)
-class MoveMetrics:
-    """``move_time``: from the move's start until the position stays within ``tolerance`` |X| of
-    the target and the command within ``tolerance`` U of its final value (for an open-loop command
-    that is its end, at the grid); ``residual``: the largest |y_j - y_j,final| of the position and
-    the deflections over one period of the slowest mode after the move time, divided by |X| (the
-    definition of ``optimal.residual_after_move``, on the recorded samples); ``peak``: max |u|."""
-
-    move_time: float
-    residual: float
-    peak: float
-
-
-def move_metrics(t, u, position, deflections, distance: float, u_max: float, window: float,
-                 tolerance: float = 1e-3, u_final: float = 0.0) -> MoveMetrics:
-    """The metrics of :class:`MoveMetrics` from samples at ``t`` (the move starts at t[0])."""
-    t, u, position = (np.asarray(a, dtype=float) for a in (t, u, position))
-    deflections = np.atleast_2d(np.asarray(deflections, dtype=float))
-    outside = (np.abs(position - distance) > tolerance * abs(distance)) | (np.abs(u - u_final) > tolerance * u_max)
-    late = np.flatnonzero(outside)
-    if late.size and late[-1] + 1 >= t.size:
-        return MoveMetrics(math.inf, math.nan, float(np.max(np.abs(u))))
-    first = late[-1] + 1 if late.size else 0
-    span = (t >= t[first] - 1e-12 * window) & (t <= t[first] + window * (1 + 1e-9))
-    errors = [np.abs(position[span] - distance)] + [np.abs(row[span]) for row in deflections]
-    residual = max(float(np.max(e)) for e in errors) / abs(distance)
-    return MoveMetrics(float(t[first] - t[0]), residual, float(np.max(np.abs(u))))
-
-
-# ---------------------------------------------------------------------------------------------
-# Systems and the comparison
 
 
 @dataclasses.dataclass(frozen=True)
@@ -281,36 +93,6 @@ class Comparison:
         return "\n".join(lines)
 
 
-def _signal_table(command) -> str:
-    """ReferencePlayer ``table`` of an ``optimal.Command`` (zero-order hold, exact breaks)."""
-    return json.dumps({"kind": "signal_table", "interpolation": "hold", "time": list(command.breaks),
-                       "value": [*command.levels, command.final]})
-
-
-def _modes_hz(plant) -> dict:
-    modes = plant.flexible_modes()
-    if not 1 <= len(modes) <= 4:
-        raise ValueError(f"plant {plant.name!r} must have 1 to 4 flexible modes for the shaper FMUs, got {len(modes)}")
-    values = {"n_modes": len(modes)}
-    for i, (omega, zeta) in enumerate(modes, start=1):
-        values[f"f[{i}]"] = omega / (2.0 * math.pi)
-        values[f"zeta[{i}]"] = zeta
-    return values
-
-
-def _mode_arrays(modes: dict, fmu) -> dict:
-    """The shaper's modes (``_modes_hz``) as the FMI 3.0 array parameters f and zeta of ``fmu``, whole:
-    the modes first, the FMU's own start values after them (unused: n_modes says how many count)."""
-    from fmpy import read_model_description
-
-    declared = {v.name: str(v.start).split() for v in read_model_description(str(fmu)).modelVariables}
-    arrays = {"n_modes": modes["n_modes"]}
-    for name in ("f", "zeta"):
-        given = [modes[f"{name}[{i}]"] for i in range(1, modes["n_modes"] + 1)]
-        arrays[name] = given + [float(v) for v in declared[name][len(given):]]
-    return arrays
-
-
 def compare(plant_model, distance: float, candidates=CANDIDATES, step: float = 1e-6, *, cache="fmus",
             u_max: float | None = None, tolerance: float = 1e-3, stop_time: float | None = None,
             plot=None, write_ssp=None, target: str | None = None, native: bool = False,
@@ -352,7 +134,7 @@ def compare(plant_model, distance: float, candidates=CANDIDATES, step: float = 1
             raise ValueError(f"u_max not given and plant {plant.name!r} declares no limit for {plant.inputs[0]!r}")
         u_max = plant.limits[plant.inputs[0]]
     u_max = check_positive(u_max, "u_max")
-    modes = _modes_hz(plant)
+    modes = modes_hz(plant)
     window = 2.0 * math.pi / min(omega for omega, _ in plant.flexible_modes())
     fmus = FMUCache(cache, native=native, fmi_version=fmi_version)
     plant_fmu = fmus.plant(plant)
@@ -378,35 +160,35 @@ def compare(plant_model, distance: float, candidates=CANDIDATES, step: float = 1
     for name in candidates:
         start, extra = 0.0, ()
         if name in ("bang-bang", "time-optimal"):
-            table = _signal_table(rigid if name == "bang-bang" else optimal.command)
+            table = signal_table(rigid if name == "bang-bang" else optimal.command)
             sys_ = system(name).add("player", player, {"table": table}).connect("player.y_mean", command)
-        elif name in _SHAPER_KINDS:
+        elif name in SHAPER_KINDS:
             shaper_fmu = fmus.slave("Shaper")
-            bound = _mode_arrays(modes, shaper_fmu) if fmi_version == "3.0" else modes
-            sys_ = (system(name).add("player", player, {"table": _signal_table(rigid)})
-                    .add("shaper", shaper_fmu, {"kind": _SHAPER_KINDS[name], "Ts": step, **bound})
+            bound = mode_arrays(modes, shaper_fmu) if fmi_version == "3.0" else modes
+            sys_ = (system(name).add("player", player, {"table": signal_table(rigid)})
+                    .add("shaper", shaper_fmu, {"kind": SHAPER_KINDS[name], "Ts": step, **bound})
                     .connect("player.y_mean", "shaper.u").connect("shaper.y", command))
         elif name.startswith("stos-"):
             sys_ = stos_system(plant, distance, step, fmus, u_max, shaper=name.removeprefix("stos-"))
         else:  # ekf-tuned; its estimate is recorded, so the design it shaped with can be checked
-            start, both = _ekf_tuned_moves(rigid, window, step)
-            sys_ = _ekf_tuned_system(system(name), fmus, both, distance, step, modes, command)
+            start, both = ekf_tuned_moves(rigid, window, step)
+            sys_ = ekf_tuned_system(system(name), fmus, both, distance, step, modes, command)
             extra = ("tuner.omega_est", "tuner.zeta_est", "tuner.converged")
         if native:
-            sys_ = _baked_in(sys_, fmus, strings_only=False)
+            sys_ = baked_in(sys_, fmus, strings_only=False)
         results = run_system(sys_, start, extra)
         if write_ssp is not None:
             path = Path(write_ssp)
             if target == "omsimulator":
-                sys_ = _baked_in(sys_, fmus, strings_only=True)
+                sys_ = baked_in(sys_, fmus, strings_only=True)
             written.append(write_system(sys_.for_experiment(start + stop_time), path.with_stem(f"{path.stem}_{name.replace('-', '_')}"),
                                         target, step if target else None))
         if start > 0.0:
             # The plant is linear: remove what is left of the identification move's ring-down
             # (that move alone through the same tuner, which passes it unshaped and one step late
             # before it converges), so that the measured move is judged by its own vibration.
-            alone = _ekf_tuned_system(system("identification"), fmus, rigid, distance, step, modes, command)
-            first = run_system(_baked_in(alone, fmus, strings_only=False) if native else alone, start)
+            alone = ekf_tuned_system(system("identification"), fmus, rigid, distance, step, modes, command)
+            first = run_system(baked_in(alone, fmus, strings_only=False) if native else alone, start)
             for output in outputs:
                 results[output] -= first[output]
         runs.append((name, results, start))
@@ -428,99 +210,3 @@ def compare(plant_model, distance: float, candidates=CANDIDATES, step: float = 1
     if plot is not None:
         plot_compare(comparison, plot)
     return comparison
-
-
-def _baked_in(system, fmus: FMUCache, strings_only: bool):
-    """``system`` with each slave's bindings baked into a copy of its FMU as start values: the
-    String ones, removed from the bindings, for OMSimulator, which imports no String binding (see
-    :mod:`shapefmu.fmi.ssp.targets`); every one, the bindings kept, for a native twin, which
-    designs at build time and refuses another value than its build value."""
-    result = copy.copy(system)
-    result.components = {}
-    for name, component in system.components.items():
-        baked = {k: v for k, v in component.parameters.items()
-                 if not strings_only or component.connectors[k].type == "String"}
-        model = fmus.model_of(component.fmu)
-        if baked and model is not None:
-            component = copy.copy(component)
-            component.fmu = fmus.slave(model, **baked)
-            component.connectors = {k: dataclasses.replace(c, start=baked[k]) if k in baked else c
-                                    for k, c in component.connectors.items()}
-            if strings_only:
-                component.parameters = {k: v for k, v in component.parameters.items() if k not in baked}
-        result.components[name] = component
-    return result
-
-
-def stos_system(plant, distance: float, Ts: float, fmus: FMUCache, u_max: float | None = None,
-                shaper: str = "simultaneous"):
-    """The SSP system STOS <-> plant: the STOSController FMU, designed like ``stos.stos_law(plant,
-    shaper, Ts)`` (``shaper``: "convolution" or "simultaneous"; settle controller included) with
-    ``target`` = ``distance`` bound as a parameter, reading the measured plant's ``position`` and
-    ``velocity`` and driving its input. Run it with the macro step ``Ts``."""
-    from shapefmu.fmi.ssp import System
-    from shapefmu.plants import as_plant
-    from shapefmu.stos import rigid_body, stos_law
-
-    plant = as_plant(plant)
-    b, damping = rigid_body(plant)
-    if shaper not in _SHAPER_KINDS:
-        raise ValueError(f"shaper must be one of {', '.join(_SHAPER_KINDS)}, got {shaper!r}")
-    law = stos_law(plant, shaper, Ts, u_max)
-    controller = {"b": b, "U": law.U, "damping": damping, "kind": _SHAPER_KINDS[shaper], "Ts": Ts, "settle": True,
-                  **_modes_hz(plant), **{key: law.settle[key] for key in _SETTLE_KEYS}, "target": distance}
-    return (System("stos").add("controller", fmus.slave("STOSController"), controller)
-            .add("plant", fmus.plant(plant))
-            .connect("plant.position", "controller.x_r").connect("plant.velocity", "controller.x_r_dot")
-            .connect("controller.u", f"plant.{plant.inputs[0]}"))
-
-
-def _ekf_tuned_moves(rigid, window: float, step: float):
-    """(start, command): the identification move, a rest while the EKF converges, then the measured
-    move, the same bang-bang again from X to 2X, starting at ``start``."""
-    from shapefmu.optimal import Command
-
-    rest = 10.0 * window  # the EKF converges within about five periods of the ring-down (paper 001)
-    start = step * math.ceil((rigid.duration + rest) / step)  # on the grid: the run ends a whole number of steps later
-    return start, Command((*rigid.breaks, *(start + b for b in rigid.breaks)), (*rigid.levels, 0.0, *rigid.levels))
-
-
-def _ekf_tuned_system(sys_, fmus, moves, distance, step, modes, command):
-    """A ReferencePlayer playing ``moves`` into an EKFTuner that drives the plant's input.
-
-    The EKF (paper 001) watches deflection_1 from a guess 10 % below the first mode and designs a
-    ZVD shaper for its estimate; the tuner switches the shaper in while the command rests."""
-    tuner = {"kind": "zvd", "Ts": step, "omega0": 0.9 * 2.0 * math.pi * modes["f[1]"], "amplitude": 1e-2 * distance}
-    return (sys_.add("player", fmus.slave("ReferencePlayer"), {"table": _signal_table(moves)})
-            .add("tuner", fmus.slave("EKFTuner"), tuner)
-            .connect("player.y_mean", "tuner.u").connect("plant.deflection_1", "tuner.vibration")
-            .connect("tuner.y", command))
-
-
-def plot_compare(comparison: Comparison, path) -> Path:
-    """u(t), the position error and the deflections of every candidate, from its move's start."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    figure, axes = plt.subplots(3, 1, sharex=True, figsize=(9, 8))
-    for run in comparison.runs:
-        r = run.results
-        moving = r["time"] >= run.start - 1e-12
-        ms = 1e3 * (r["time"][moving] - run.start)
-        axes[0].step(ms, r[comparison.command][moving], where="pre", lw=0.8, label=run.name)
-        axes[1].plot(ms, r["plant.position"][moving] - comparison.distance, lw=0.8, label=run.name)
-        axes[2].plot(ms, r["plant.deflection_1"][moving], lw=0.8, label=run.name)
-    axes[0].set_ylabel("command u")
-    axes[1].set_ylabel("position - target")
-    axes[2].set_ylabel("deflection_1")
-    axes[2].set_xlabel("time from the move's start [ms]")
-    axes[0].legend(fontsize="small", ncol=3)
-    axes[0].set_title(f"{comparison.plant}: move of {comparison.distance:g}, FMUs at {comparison.step:g} s")
-    figure.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    figure.savefig(path)
-    plt.close(figure)
-    return path
