@@ -12,13 +12,12 @@ import subprocess
 import tempfile
 import zipfile
 from pathlib import Path
-from types import SimpleNamespace
 
 from fmpy import read_model_description
 
 from shapefmu.fmi.native.compile import LAYER_HEADERS, LAYER_SOURCES, build_binaries, build_description, copy_c_files, zip_fmu
-from shapefmu.fmi.python.model_description import model_description
-from shapefmu.fmi.python.slave_base import Variable
+from shapefmu.fmi.description import ModelDescription, fmi2
+from shapefmu.fmi.kinds.interface import input_, output
 
 HERE = Path(__file__).parent
 HEADERS = HERE.parent / "src" / "shapefmu" / "fmi" / "native" / "c"
@@ -65,13 +64,13 @@ def build_empty_native(path: Path) -> Path:
         c_files = [*LAYER_SOURCES, "model.c"]
         (sources / "buildDescription.xml").write_text(build_description("Empty", c_files))
         build_binaries(root, "Empty", c_files, "empty native")
-        variables = [Variable("u", 0, "Real", "input", "continuous", 0.0, "1", "input"),
-                     Variable("y", 1, "Real", "output", "continuous", 0.0, "1", "output, always 0")]
-        view = SimpleNamespace(model_name="Empty", variables=variables, values={"u": 0.0, "y": 0.0},
-                               description="empty native FMU: the generic layer alone")
-        (root / "modelDescription.xml").write_text(model_description(
-            view, GUID, {"y": []}, (0.0, 1.0, 1e-3), "", native_sources=tuple(c_files),
-            log_categories=(("logStatusError", "errors"), ("logAll", "debug"))))
+        description = ModelDescription(
+            model_name="Empty", identifier="Empty", guid=GUID, description="empty native FMU: the generic layer alone",
+            generation_tool="shapefmu benchmarks/native_loop.py",
+            variables=(input_("u", 0.0, "input"), output("y", "output, always 0")), dependencies={"y": []},
+            log_categories=(("logStatusError", "errors"), ("logAll", "debug")), experiment=(0.0, 1.0, 1e-3),
+            source_files=tuple(c_files))
+        (root / "modelDescription.xml").write_text(fmi2.write(description))
         return zip_fmu(root, Path(path))
 
 

@@ -29,7 +29,7 @@ import numpy as np
 
 from shapefmu.cosim import Master
 from shapefmu.compare import FMUCache
-from shapefmu.fmi.python.slaves.stos_controller import SETTLE_GAINS
+from shapefmu.fmi.kinds.stos_controller import SETTLE_GAINS
 from shapefmu.fmi.ssp import read_ssp
 from shapefmu.optimal import time_optimal
 from shapefmu.plants import library

@@ -91,7 +91,7 @@ def test_no_module_imports_a_higher_layer():
 
 def test_the_checks_see_real_arrows():
     # Guards the two tests above against a resolver that finds nothing (they would pass vacuously).
-    assert "shapefmu.runtime.checks" in GRAPH["shapefmu.fmi.python.slaves.shaper"]  # a relative import
+    assert "shapefmu.runtime.checks" in GRAPH["shapefmu.fmi.kinds.shaper"]  # a relative import
     assert "shapefmu.cosim" in GRAPH["shapefmu.cli.simulate"]                      # a lazy import
     assert _cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": set()}) == [["a", "b", "c"]]
 

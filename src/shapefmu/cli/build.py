@@ -23,7 +23,7 @@ from pathlib import Path
 
 from shapefmu.cli.arguments import output_file, output_folder, parse_mode
 from shapefmu.fmi.python.builder import build_all, build_fmu
-from shapefmu.fmi.python.slaves.shaper import KINDS, MAX_MODES
+from shapefmu.fmi.kinds.shaper import KINDS, MAX_MODES
 from shapefmu.shapers.catalog import check_sampling
 
 
@@ -135,7 +135,7 @@ def _build_reference(args):
 
 
 def _add_shape_filter(parser):
-    from shapefmu.fmi.python.slaves.shape_filter import BASES, KINDS as FILTER_KINDS
+    from shapefmu.fmi.kinds.shape_filter import BASES, KINDS as FILTER_KINDS
 
     _add_native(parser)
     parser.add_argument("--kind", choices=FILTER_KINDS, default="hanning", help="filter design (default hanning)")
@@ -188,9 +188,9 @@ def _given(**options) -> dict:
 
 def _parameters(name: str, items) -> dict:
     """--param NAME=VALUE items as the FMU ``name``'s start values, typed as it declares them."""
-    from shapefmu.fmi.python.builder import slave_class
+    from shapefmu.fmi.kinds import kind
 
-    declared = {v.name: v for v in slave_class(name)(instance_name="cli").variables if v.causality == "parameter"}
+    declared = {v.name: v for v in kind(name).INTERFACE.variables if v.causality == "parameter"}
     starts = {}
     for item in items:
         key, sep, text = item.partition("=")

@@ -47,7 +47,7 @@ class FMUCache:
         return path
 
     def slave(self, name: str, **start_values) -> Path:
-        """``<name>.fmu`` for a slave of ``shapefmu.fmi.python.slaves`` (e.g. "Shaper", "STOSController");
+        """``<name>.fmu`` for a kind of ``shapefmu.fmi.kinds`` (e.g. "Shaper", "STOSController");
         with ``start_values``, a copy with those baked in, ``<name>_<digest>.fmu``."""
         from shapefmu.fmi.python.builder import build_fmu, bundled_sources, package_name
 

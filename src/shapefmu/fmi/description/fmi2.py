@@ -1,155 +1,130 @@
-"""modelDescription.xml for a shapefmu slave (FMI 2.0 co-simulation), written from the slave itself.
+"""The FMI 2.0 writer: ``modelDescription.xml`` of a ``ModelDescription`` (FMI 2.0.4, section 2.2).
 
-pythonfmu's generator is not used: it lists outputs without dependencies, omits InitialUnknowns and
-units, and declares state handling off. Here every variable carries its unit and description,
-ModelStructure gives each output's real dependencies (``Fmi2Slave.output_dependencies``, computed
-from the design the start values produce) and the InitialUnknowns, and the capability flags say what
-the FMU does: no external tool, state get/set and serialisation.
+Every variable is listed as a ScalarVariable with its value reference (its position) but time, the
+independent variable, which FMI 2.0 lists nowhere (FMI Library, which libcosim reads descriptions
+with, logs an error for a listed one without a start value, the only form the standard allows).
+ModelStructure indices are 1-based positions in ModelVariables.
 """
 
-import datetime
-import re
+from __future__ import annotations
+
 from xml.etree.ElementTree import Element, SubElement, indent, tostring
 
-from shapefmu import __version__
-from shapefmu.fmi.python.slave_base import UNITS
+from shapefmu.fmi.description.model import ModelDescription
+from shapefmu.fmi.description.units import base_units
+from shapefmu.fmi.description.xml_text import check_attributes
 
 
-# Characters outside XML 1.0's Char production (section 2.2): no reference can write them either.
-_NOT_XML = re.compile("[^\t\n\r\x20-\ud7ff\ue000-\ufffd\U00010000-\U0010ffff]")
-
-
-def check_xml_string(value, owner, what="value"):
-    """Refuse a string XML 1.0 cannot hold (a String start value from a user's file), naming ``owner``."""
-    bad = _NOT_XML.search(value)
-    if bad:
-        raise ValueError(f"{owner}: its {what} holds the character U+{ord(bad.group()):04X} at position {bad.start()}, "
-                         f"which XML 1.0 (modelDescription.xml) cannot hold")
-
-
-def _check_xml_text(root):
-    owners = {child: variable.get("name") for variable in root.iter("ScalarVariable") for child in variable}
-    for node in root.iter():
-        for name, value in node.attrib.items():
-            check_xml_string(value, owners.get(node, node.get("name", node.tag)), f"{name} value")
-
-
-def _number(value):
+def number(value) -> str:
+    """A start, min or max as the standard writes it: a Real's exact repr, an Integer's digits."""
     return repr(float(value)) if isinstance(value, float) else str(value)
 
 
-# The log categories of a pythonfmu FMU: (name, description).
-LOG_CATEGORIES = (
-    ("logStatusWarning", "Warnings"),
-    ("logStatusError", "Errors: bad parameters, non-finite inputs, calls out of order"),
-    ("logStatusFatal", "Failures of the embedded Python runtime"),
-    ("logAll", "Everything else (debug logging)"),
-)
+def _flag(value: bool) -> str:
+    return "true" if value else "false"
 
 
-def model_description(slave, guid, dependencies, experiment, pythonfmu_version, *, native_sources=None,
-                      log_categories=LOG_CATEGORIES):
-    """The XML text for ``slave`` (an initialised instance) with the given GUID.
-
-    ``dependencies`` maps each output to the inputs it feeds through from; ``experiment`` is
-    (start, stop, step) for the DefaultExperiment. ``native_sources`` (the C files) describes a
-    native FMU made from the slave's variables (``shapefmu.fmi.native.sampled``): it uses the
-    host's memory callbacks and lists its sources; ``log_categories`` its log categories.
-    """
-    root = Element(
-        "fmiModelDescription",
-        {
-            "fmiVersion": "2.0",
-            "modelName": slave.model_name,
-            "guid": guid,
-            "description": slave.description,
-            "generationTool": f"shapefmu {__version__} "
-            + ("native C generator" if native_sources is not None
-               else f"(pythonfmu {pythonfmu_version} export library)"),
-            "generationDateAndTime": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
-            "variableNamingConvention": "structured",
-            "numberOfEventIndicators": "0",
-        },
-    )
-    cosimulation = SubElement(
-        root,
-        "CoSimulation",
-        {
-            "modelIdentifier": slave.model_name,
-            "needsExecutionTool": "false",
-            "canHandleVariableCommunicationStepSize": "true",
-            "canInterpolateInputs": "false",
-            "maxOutputDerivativeOrder": "0",
-            "canRunAsynchronuously": "false",
-            "canBeInstantiatedOnlyOncePerProcess": "false",
-            "canNotUseMemoryManagementFunctions": "true" if native_sources is None else "false",
-            "canGetAndSetFMUstate": "true",
-            "canSerializeFMUstate": "true",
-            "providesDirectionalDerivative": "false",
-        },
-    )
-    if native_sources:
-        files = SubElement(cosimulation, "SourceFiles")
-        for name in native_sources:
+def _interfaces(root: Element, md: ModelDescription) -> None:
+    common = {"modelIdentifier": md.identifier, "needsExecutionTool": "false"}
+    flags = {"canBeInstantiatedOnlyOncePerProcess": "false",
+             "canNotUseMemoryManagementFunctions": _flag(not md.host_memory), "canGetAndSetFMUstate": "true",
+             "canSerializeFMUstate": "true", "providesDirectionalDerivative": _flag(md.directional_derivatives)}
+    elements = [SubElement(root, "ModelExchange", {**common, **flags})] if md.model_exchange else []
+    elements.append(SubElement(root, "CoSimulation", {
+        **common, "canHandleVariableCommunicationStepSize": "true", "canInterpolateInputs": "false",
+        "maxOutputDerivativeOrder": "0", "canRunAsynchronuously": "false", **flags}))
+    for element in elements if md.source_files else ():
+        files = SubElement(element, "SourceFiles")
+        for name in md.source_files:
             SubElement(files, "File", {"name": name})
-    used = sorted({v.unit for v in slave.variables if v.type == "Real"})
-    units = SubElement(root, "UnitDefinitions")
-    for name in used:
-        unit = SubElement(units, "Unit", {"name": name})
-        if UNITS[name]:
-            SubElement(unit, "BaseUnit", {k: str(e) for k, e in UNITS[name].items()})
+
+
+def _typed(variable, index_of) -> dict:
+    typed = {}
+    if variable.start is not None:
+        typed["start"] = _flag(variable.start) if variable.type == "Boolean" else number(variable.start)
+    if variable.type == "Real" and variable.unit:
+        typed["unit"] = variable.unit
+    if variable.nominal is not None:
+        typed["nominal"] = repr(float(variable.nominal))
+    if variable.derivative_of is not None:
+        typed["derivative"] = str(index_of[variable.derivative_of])
+    if variable.type in ("Real", "Integer"):
+        if variable.minimum is not None:
+            typed["min"] = number(variable.minimum)
+        if variable.maximum is not None:
+            typed["max"] = number(variable.maximum)
+    return typed
+
+
+def write(md: ModelDescription) -> str:
+    """The XML text of ``md`` as an FMI 2.0 model description."""
+    root = Element("fmiModelDescription", {
+        "fmiVersion": "2.0", "modelName": md.model_name, "guid": md.guid, "description": md.description,
+        "generationTool": md.generation_tool, "generationDateAndTime": md.generation_date or "",
+        "variableNamingConvention": "structured", "numberOfEventIndicators": "0"})
+    for optional in ("description", "generationDateAndTime"):
+        if not root.get(optional):
+            del root.attrib[optional]
+    _interfaces(root, md)
+    if md.units():
+        definitions = SubElement(root, "UnitDefinitions")
+        for name in md.units():
+            unit = SubElement(definitions, "Unit", {"name": name})
+            if base_units(name):
+                SubElement(unit, "BaseUnit", base_units(name))
     categories = SubElement(root, "LogCategories")
-    for name, text in log_categories:
-        SubElement(categories, "Category", {"name": name, "description": text})
-    start, stop, step = experiment
-    SubElement(root, "DefaultExperiment", {"startTime": _number(start), "stopTime": _number(stop), "stepSize": _number(step)})
+    for name, text in md.log_categories:
+        SubElement(categories, "Category", {"name": name, **({"description": text} if text else {})})
+    if md.experiment is not None:
+        start, stop, step = md.experiment
+        SubElement(root, "DefaultExperiment",
+                   {"startTime": number(start), "stopTime": number(stop), "stepSize": number(step)})
+    listed = [(vr, v) for vr, v in enumerate(md.variables) if v.causality != "independent"]
+    index_of = {v.name: position for position, (_, v) in enumerate(listed, 1)}
     variables = SubElement(root, "ModelVariables")
-    for var in slave.variables:
-        attributes = {
-            "name": var.name,
-            "valueReference": str(var.vr),
-            "description": var.description,
-            "causality": var.causality,
-            "variability": var.variability,
-        }
-        if var.causality == "parameter":
-            attributes["initial"] = "exact"
-        elif var.causality == "output":
-            attributes["initial"] = "calculated"
+    owner = {}
+    for vr, v in listed:
+        attributes = {"name": v.name, "valueReference": str(vr), "description": v.description,
+                      "causality": v.causality, "variability": v.variability}
+        if not v.description:
+            del attributes["description"]
+        if v.initial:
+            attributes["initial"] = v.initial
         node = SubElement(variables, "ScalarVariable", attributes)
-        typed = {}
-        if var.causality != "output":
-            start_value = slave.values[var.name]
-            typed["start"] = ("true" if start_value else "false") if var.type == "Boolean" else _number(start_value)
-        if var.type == "Real":
-            typed["unit"] = var.unit
-        if var.type in ("Real", "Integer"):
-            if var.minimum is not None:
-                typed["min"] = _number(var.minimum)
-            if var.maximum is not None:
-                typed["max"] = _number(var.maximum)
-        SubElement(node, var.type, typed)
-    index = {var.name: var.vr + 1 for var in slave.variables}  # ModelStructure indices are 1-based
-    parameters = [index[v.name] for v in slave.variables if v.causality == "parameter"]
-    structure = SubElement(root, "ModelStructure")
-    outputs = [v for v in slave.variables if v.causality == "output"]
-    if outputs:
-        node = SubElement(structure, "Outputs")
-        for var in outputs:
-            inputs = sorted(index[name] for name in dependencies[var.name])
-            attributes = {"index": str(index[var.name]), "dependencies": " ".join(map(str, inputs))}
-            if inputs:
-                # The feed-through factor (e.g. the first impulse's amplitude) is fixed at initialisation.
-                attributes["dependenciesKind"] = " ".join("fixed" for _ in inputs)
-            SubElement(node, "Unknown", attributes)
-        node = SubElement(structure, "InitialUnknowns")
-        for var in outputs:
-            # At initialisation the design itself depends on every parameter.
-            inputs = sorted(parameters + [index[name] for name in dependencies[var.name]])
-            SubElement(node, "Unknown", {"index": str(index[var.name]), "dependencies": " ".join(map(str, inputs))})
-    _check_xml_text(root)
+        owner[SubElement(node, v.type, _typed(v, index_of))] = v.name
+    _structure(root, md, [v for _, v in listed], index_of)
+    check_attributes(root, lambda node: owner.get(node, node.get("name", node.tag)))
     # ElementTree writes tabs and line ends in attribute values as character references, so a
     # String start value (a table's JSON text) reads back exactly as the FMU holds it; a literal
     # line end would read back as a space (attribute-value normalisation, XML 1.0 section 3.3.3).
     indent(root, space="  ")
     return '<?xml version="1.0" encoding="UTF-8"?>\n' + tostring(root, encoding="unicode") + "\n"
+
+
+def _structure(root: Element, md: ModelDescription, listed, index_of) -> None:
+    outputs = [v for v in listed if v.causality == "output"]
+    derivatives = [v for v in listed if v.derivative_of is not None]
+    parameters = [index_of[v.name] for v in listed if v.causality == "parameter"]
+    structure = SubElement(root, "ModelStructure")
+
+    def depends(v):
+        return sorted(index_of[name] for name in md.dependencies.get(v.name, ()))
+
+    for tag, unknowns in (("Outputs", outputs), ("Derivatives", derivatives)):
+        if unknowns:
+            node = SubElement(structure, tag)
+            for v in unknowns:
+                attributes = {"index": str(index_of[v.name]), "dependencies": " ".join(map(str, depends(v)))}
+                if md.designed and depends(v):
+                    # The feed-through factor (e.g. the first impulse's amplitude) is fixed at initialisation.
+                    attributes["dependenciesKind"] = " ".join("fixed" for _ in depends(v))
+                SubElement(node, "Unknown", attributes)
+    initial = outputs if md.designed else sorted(outputs + derivatives, key=lambda v: index_of[v.name])
+    if initial:
+        node = SubElement(structure, "InitialUnknowns")
+        for v in initial:
+            attributes = {"index": str(index_of[v.name])}
+            if md.designed:  # the design made at initialisation depends on every parameter
+                attributes["dependencies"] = " ".join(map(str, sorted(parameters + depends(v))))
+            SubElement(node, "Unknown", attributes)

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 import casadi as ca
 
+from shapefmu.fmi.kinds.interface import Interface, Variable
 from shapefmu.runtime.checks import check_text
 
 # What the C wrapper checks when a parameter is set (plant_model.h, PlantConstraint).
@@ -88,7 +89,7 @@ class ModelPart:
     def __post_init__(self):
         # The name and every description and unit reach modelDescription.xml (escaped there, but
         # XML cannot carry control characters at all); the C sees only check_name'd names and the
-        # model identifier made of the name (description.model_identifier), never these strings.
+        # model identifier made of the name (``identifier``), never these strings.
         check_text(self.name, "plant name")
         check_text(self.description, f"description of plant {self.name!r}")
         for what, signals in (("state", self.states), ("input", self.inputs), ("output", self.outputs)):
@@ -111,6 +112,38 @@ class ModelPart:
         if not self.linear and self.substep_parameter not in [p.name for p in self.parameters]:
             raise ValueError(f"plant {self.name!r}: a nonlinear plant needs its RK4 substep among the parameters, "
                              f"got substep_parameter={self.substep_parameter!r}")
+
+    @property
+    def identifier(self) -> str:
+        """The C identifier the shared library is named by: the name with non-word characters replaced."""
+        identifier = "".join(c if c.isalnum() or c == "_" else "_" for c in self.name)
+        return identifier if identifier[:1].isalpha() else f"plant_{identifier}"
+
+    def interface(self) -> Interface:
+        """The plant FMU's interface, its variables in the order of the values of ``c/plant_model.h``:
+        time, the states ``state.<name>``, their derivatives, the inputs, the outputs, the parameters.
+        One input is the command the plant takes (FMI 3.0 terminals); several are no one command."""
+        variables = [Variable("time", "Real", "independent", "continuous")]
+        variables += [Variable(f"state.{s.name}", "Real", "local", "continuous", s.start, s.unit, s.description,
+                               initial="exact", nominal=s.nominal) for s in self.states]
+        variables += [Variable(f"der(state.{s.name})", "Real", "local", "continuous", initial="calculated",
+                               derivative_of=f"state.{s.name}") for s in self.states]
+        variables += [Variable(s.name, "Real", "input", "continuous", s.start, s.unit, s.description)
+                      for s in self.inputs]
+        variables += [Variable(s.name, "Real", "output", "continuous", None, s.unit, s.description, initial="calculated")
+                      for s in self.outputs]
+        variables += [Variable(q.name, "Real", "parameter", "tunable" if q.tunable else "fixed", q.value, q.unit,
+                               q.description, initial="exact") for q in self.parameters]
+        command = self.inputs[0].name if len(self.inputs) == 1 else None
+        return Interface(self.name, self.description, tuple(variables), command_in=command)
+
+    def dependencies_by_name(self) -> dict[str, list[str]]:
+        """Each output's and derivative's dependencies on the states and inputs, by variable name."""
+        known = [f"state.{s.name}" for s in self.states] + [s.name for s in self.inputs]
+        derivative_dependencies, output_dependencies = self.dependencies()
+        result = {f"der(state.{s.name})": [known[d] for d in deps] for s, deps in zip(self.states, derivative_dependencies)}
+        result.update({s.name: [known[d] for d in deps] for s, deps in zip(self.outputs, output_dependencies)})
+        return result
 
     @property
     def p(self) -> ca.SX:

@@ -9,7 +9,7 @@
  * another array's elements come between them, as a Shaper's f[i] and zeta[i] do). Value reference 0 is
  * time, the independent variable; the k-th variable of that list has value reference k. A model
  * part's own "time" slot (the plants keep time in slot 0) is time, not another variable.
- * shapefmu.fmi.native.description3 numbers the modelDescription.xml the same way.
+ * shapefmu.fmi.description.fmi3 numbers the modelDescription.xml the same way.
  */
 #ifndef FMI3_LAYER_H
 #define FMI3_LAYER_H
