@@ -48,6 +48,13 @@ class ModeEstimate:
     EKF's convergence test at the last sample (covariance of omega and sigma below threshold and
     both stable over the last period); ``missing`` counts the samples skipped as None/NaN and
     ``resets`` the steps after which the filter had to return to its last good estimate.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> e = ModeEstimate(62.8, 1.26, 62.81, 0.02, np.empty((0, 2)), True)
+    >>> e.zeta, e.converged, e.missing
+    (0.02, True, 0)
     """
 
     omega_d: float
@@ -143,6 +150,18 @@ def estimate_mode(
     starts within the linear range and uses all of it, bringing the frequency error of a heavily
     damped ring-down (zeta = 0.1) from about twice to within a few percent of the Cramer-Rao bound.
     Use 1 for exactly what the streaming ``ModeEstimator`` would report at the end of the record.
+
+    Examples
+    --------
+    >>> import math
+    >>> import numpy as np
+    >>> fs, f, zeta = 1000.0, 10.0, 0.02  # a 10 Hz ring-down, 2 % damping, 2 s at 1 kHz
+    >>> t = np.arange(2000) / fs
+    >>> sigma, omega_d = 2 * math.pi * f * zeta, 2 * math.pi * f * math.sqrt(1 - zeta**2)
+    >>> y = np.exp(-sigma * t) * np.cos(omega_d * t)
+    >>> e = estimate_mode(y, fs, 0.9 * omega_d)  # from a guess 10 % low
+    >>> round(e.omega_n / (2 * math.pi), 3), round(e.zeta, 3), e.converged
+    (10.0, 0.02, True)
     """
     fs, omega0, options = _ekf_options(fs, omega0, sigma0, 1.0 if amplitude is None else amplitude, q, r, p0,
                                        omega_tol, sigma_tol)
@@ -166,6 +185,19 @@ class ModeEstimator:
 
     Same parameters as ``estimate_mode`` except that ``amplitude`` (the expected signal scale, which
     a stream cannot look ahead for) defaults to 1.
+
+    Examples
+    --------
+    >>> import math
+    >>> import numpy as np
+    >>> fs, f, zeta = 1000.0, 10.0, 0.02  # a 10 Hz ring-down, 2 % damping, 2 s at 1 kHz
+    >>> t = np.arange(2000) / fs
+    >>> sigma, omega_d = 2 * math.pi * f * zeta, 2 * math.pi * f * math.sqrt(1 - zeta**2)
+    >>> y = np.exp(-sigma * t) * np.cos(omega_d * t)
+    >>> estimator = ModeEstimator(fs, 0.9 * omega_d)
+    >>> converged = [estimator.update(sample) for sample in y]
+    >>> converged[-1], round(estimator.estimate().omega_n / (2 * math.pi), 2)
+    (True, 10.0)
     """
 
     def __init__(
@@ -215,6 +247,17 @@ def log_decrement_zeta(y, fs: float, omega_d: float, periods: int | None = None)
     Peaks are taken one per damped period (2 pi / omega_d) from the start of ``y``, each refined by
     a parabola through the three samples around it; ``periods`` limits how many are used. An
     estimate independent of the EKF, for checking it.
+
+    Examples
+    --------
+    >>> import math
+    >>> import numpy as np
+    >>> fs, f, zeta = 1000.0, 10.0, 0.02  # a 10 Hz ring-down, 2 % damping, 2 s at 1 kHz
+    >>> t = np.arange(2000) / fs
+    >>> sigma, omega_d = 2 * math.pi * f * zeta, 2 * math.pi * f * math.sqrt(1 - zeta**2)
+    >>> y = np.exp(-sigma * t) * np.cos(omega_d * t)
+    >>> round(log_decrement_zeta(y, fs, omega_d), 3)
+    0.02
     """
     y = _signal(y)
     fs = check_positive(fs, "fs")
@@ -249,6 +292,19 @@ class EKFTunedShaper:
     ``shapefmu.shapers`` (e.g. ``shapers.ei``). Until the estimate has converged commands pass
     through unshaped; a new design is switched in when the command rests (see
     ``shapefmu.runtime.ekf_tuner`` for why). Same EKF options as ``ModeEstimator``.
+
+    Examples
+    --------
+    >>> import math
+    >>> import numpy as np
+    >>> fs, f, zeta = 1000.0, 10.0, 0.02  # a 10 Hz ring-down, 2 % damping, 2 s at 1 kHz
+    >>> t = np.arange(2000) / fs
+    >>> sigma, omega_d = 2 * math.pi * f * zeta, 2 * math.pi * f * math.sqrt(1 - zeta**2)
+    >>> y = np.exp(-sigma * t) * np.cos(omega_d * t)
+    >>> tuner = EKFTunedShaper(fs, 0.9 * omega_d)  # ZVD for what the EKF finds
+    >>> shaped = tuner.run(np.zeros(y.size), y)
+    >>> tuner.designs, len(tuner.shaper), round(tuner.shaper.duration, 3)  # one damped period
+    (1, 3, 0.1)
     """
 
     def __init__(

@@ -37,7 +37,13 @@ from shapefmu.plants.model import Parameter, Plant
 @dataclass(frozen=True)
 class ParameterSpec:
     """A parameter of a kind: whether it is a list, required, and the units it may be given in
-    with their factor to the unit the constructor takes (None: any non-empty unit is accepted)."""
+    with their factor to the unit the constructor takes (None: any non-empty unit is accepted).
+
+    Examples
+    --------
+    >>> PARAMETER_SPECS["rigid_flexible"]["f"].units  # a frequency in Hz or rad/s, to rad/s
+    {'Hz': 6.283185307179586, 'rad/s': 1.0}
+    """
 
     array: bool
     required: bool = True
@@ -179,7 +185,27 @@ def _signals(data, key, count, source):
 
 
 def loads(text: str, source: str = "<string>") -> Plant:
-    """Parse a plant model from TOML text; ``source`` names the file in error messages."""
+    """Parse a plant model from TOML text; ``source`` names the file in error messages.
+
+    Examples
+    --------
+    >>> text = '''
+    ... kind = "rigid_flexible"
+    ... [parameters]
+    ... b2 = { value = 2.0, unit = "1/(N*s^2)" }
+    ... f = { value = [5.0], unit = "Hz" }
+    ... zeta = { value = [0.02], unit = "1" }
+    ... b4 = { value = [-2.0], unit = "1/(N*s^2)" }
+    ... [inputs]
+    ... force = { unit = "N", max = 1.0 }
+    ... [outputs]
+    ... x = { unit = "m" }
+    ... deflection = { unit = "m" }
+    ... '''
+    >>> plant = loads(text, "example.toml")
+    >>> plant.name, plant.inputs, dict(plant.limits), round(plant.flexible_modes()[0][0] / 6.283185307179586, 9)
+    ('example', ('force',), {'force': 1.0}, 5.0)
+    """
     try:
         data = parse_nested(tomllib.loads, text, source)
     except tomllib.TOMLDecodeError as error:
@@ -228,13 +254,29 @@ def loads(text: str, source: str = "<string>") -> Plant:
 
 
 def load(path) -> Plant:
-    """Read a plant model file (``models/*.toml``), or the shipped model of that name (``disk_drive``)."""
+    """Read a plant model file (``models/*.toml``), or the shipped model of that name (``disk_drive``).
+
+    Examples
+    --------
+    >>> plant = load("disk_drive")  # the shipped models/disk_drive.toml
+    >>> plant.kind, plant.n_states, plant.parameters["f"]
+    ('rigid_flexible', 6, Parameter(value=(2000.0, 3000.0), unit='Hz'))
+    """
     path = os.fspath(shipped.find(path, (".toml",)))
     return loads(read_text_file(path, "plant model"), source=path)
 
 
 def as_plant(system) -> Plant:
-    """A ``Plant`` from a plant, a python-control LTI, or a path to a model file."""
+    """A ``Plant`` from a plant, a python-control LTI, or a path to a model file.
+
+    Examples
+    --------
+    >>> import control
+    >>> as_plant(control.tf([1.0], [1.0, 0.0, 100.0])).n_states  # a python-control LTI
+    2
+    >>> as_plant("disk_drive").name  # a model file, or a shipped model's name
+    'disk_drive'
+    """
     if isinstance(system, Plant):
         return system
     if isinstance(system, (control.StateSpace, control.TransferFunction)):
@@ -245,7 +287,16 @@ def as_plant(system) -> Plant:
 
 
 def describe(path_or_plant) -> str:
-    """The text of ``shapefmu plant show FILE``: the plant's signals, parameters and modes."""
+    """The text of ``shapefmu plant show FILE``: the plant's signals, parameters and modes.
+
+    Examples
+    --------
+    >>> for line in describe("disk_drive").splitlines()[:3]:
+    ...     print(line)
+    plant disk_drive (kind rigid_flexible), 6 states
+      input  voltage  |u| <= 11
+      outputs position, deflection_1, deflection_2
+    """
     plant = as_plant(path_or_plant)
     lines = [f"plant {plant.name} (kind {plant.kind}), {plant.n_states} states"]
     for signal in plant.inputs:

@@ -129,6 +129,12 @@ def blackman_filter(omega_n, zeta, ts, order=1, *, adjust_ts=False) -> SampledSh
     References
     ----------
     Paper 000, section 4.
+
+    Examples
+    --------
+    >>> import math
+    >>> blackman_filter(1.0, 0.0, math.pi / 100).taps.size  # M + 1 with M = 600
+    601
     """
     return _sampled(window_filters.blackman_filter(omega_n, zeta, ts, adjust_ts=adjust_ts), order)
 
@@ -148,6 +154,12 @@ def hamming_filter(omega_n, zeta, ts, order=1, *, adjust_ts=False) -> SampledSha
     References
     ----------
     Paper 000, section 5.
+
+    Examples
+    --------
+    >>> import math
+    >>> hamming_filter(1.0, 0.0, math.pi / 100).taps.size  # M + 1 with M = 400
+    401
     """
     return _sampled(window_filters.hamming_filter(omega_n, zeta, ts, adjust_ts=adjust_ts), order)
 
@@ -157,6 +169,12 @@ def hamming_null_depth(omega_n, zeta, ts, *, adjust_ts=False) -> float:
 
     Equals 4 / (25 M + 4) (see :func:`hamming_filter`); for zeta = 0 this is also the percent
     residual vibration of the order-1 Hamming filter at the design point.
+
+    Examples
+    --------
+    >>> import math
+    >>> math.isclose(hamming_null_depth(1.0, 0.0, math.pi / 100), 4 / (25 * 400 + 4))  # M = 400
+    True
     """
     _, _, omega_d = damped_mode(omega_n, zeta)
     h, ts = cosine_base("hamming", omega_d, ts, adjust_ts)
@@ -183,6 +201,13 @@ def three_hanning_filter(omega_n, zeta, ts, order=1, *, c=0.25, adjust_ts=False)
     References
     ----------
     Paper 000, section 7, eq. (6).
+
+    Examples
+    --------
+    >>> import math
+    >>> f = three_hanning_filter(2 * math.pi * 10.0, 0.0, 1e-3, adjust_ts=True)  # M whole: Ts moves
+    >>> f.taps.size, round(f.ts, 9), round(f.gain, 12)
+    (159, 0.001000721, 1.0)
     """
     design = window_filters.three_hanning_filter(omega_n, zeta, ts, c=c, adjust_ts=adjust_ts)
     return _sampled(design, order)
@@ -209,6 +234,13 @@ def differenced_filter(
     References
     ----------
     Paper 000, section 8.1, Figs. 8-9.
+
+    Examples
+    --------
+    >>> import math
+    >>> f = differenced_filter(1.0, 0.0, math.pi / 100)  # M + 2 samples, M = 400
+    >>> f.taps.size, round(f.gain, 12)
+    (402, 1.0)
     """
     design = window_filters.differenced_filter(omega_n, zeta, ts, k1=k1, k2=k2, base=base, adjust_ts=adjust_ts)
     return _sampled(design, order)
@@ -236,6 +268,13 @@ def convolved_filter(
     References
     ----------
     Paper 000, section 8.2, Figs. 10-11.
+
+    Examples
+    --------
+    >>> import math
+    >>> f = convolved_filter(1.0, 0.0, math.pi / 100)  # spans 0..2M, M = 400
+    >>> f.taps.size, round(f.gain, 12)
+    (801, 1.0)
     """
     design = window_filters.convolved_filter(
         omega_n, zeta, ts, k1=k1, k2=k2, k0=k0, base=base, adjust_ts=adjust_ts
@@ -243,6 +282,43 @@ def convolved_filter(
     return _sampled(design, order)
 
 
-#: Design functions by kind, for the command line (``shapefmu design KIND``): the kinds of the
-#: runtime's table (what the ShapeFilter FMU's ``kind`` selects), each with its namesake here.
+#: Design functions by kind: the kinds of the runtime's table (what the ShapeFilter FMU's ``kind``
+#: selects), each with its namesake here. ``get_window`` is the way to them by name.
 WINDOW_FILTERS = {kind: globals()[runtime.__name__] for kind, runtime in window_filters.WINDOW_FILTERS.items()}
+
+
+def get_window(kind, omega_n, zeta, ts, order=1, **options) -> SampledShaper:
+    """The window shape filter ``kind`` for the mode (``omega_n`` rad/s, ``zeta``) sampled at ``ts`` s,
+    as scipy.signal.get_window returns a window by name.
+
+    Parameters
+    ----------
+    kind : str
+        One of ``WINDOW_FILTERS``: rectangle, hanning, blackman, hamming, three-hanning,
+        differenced, convolved.
+    omega_n, zeta, ts, order
+        As :func:`rectangle_filter`: natural frequency (rad/s), damping ratio, sampling period (s),
+        robustness order.
+    **options
+        The kind's own keywords: ``adjust_ts`` for every kind, ``c`` for three-hanning, ``k1``,
+        ``k2``, ``base`` (and ``k0``) for differenced and convolved.
+
+    Returns
+    -------
+    SampledShaper
+        The filter's taps summing to 1 and the ts used.
+
+    Examples
+    --------
+    >>> import math
+    >>> window = get_window("hanning", 2 * math.pi * 10.0, 0.0, 1e-3)  # a 10 Hz mode, 1 kHz
+    >>> window.taps.size, round(float(window.taps.sum()), 12)
+    (201, 1.0)
+    >>> get_window("kaiser", 1.0, 0.0, 0.01)
+    Traceback (most recent call last):
+    ...
+    ValueError: kind must be one of rectangle, hanning, blackman, hamming, three-hanning, differenced, convolved, got 'kaiser'
+    """
+    if kind not in WINDOW_FILTERS:
+        raise ValueError(f"kind must be one of {', '.join(WINDOW_FILTERS)}, got {kind!r}")
+    return WINDOW_FILTERS[kind](omega_n, zeta, ts, order, **options)
