@@ -1,7 +1,7 @@
 """What the tests of the native twins share (tests/test_native_{ekf,stos,profiles,reference}.py): the
 variables an FMU declares, as compared with its pythonfmu twin's (``declared``); and for the valgrind
 drivers the includes, a logger that counts errors, CHECK and REFUSED, and (TWIN_LOOKUP, for the twins
-whose model.c is a TwinVariables table) the value reference of a variable by name. Each driver is
+whose model.c is a VariableTable (model.h)) the value reference of a variable by name. Each driver is
 PRELUDE [+ TWIN_LOOKUP] + its model header + its main()."""
 
 
@@ -36,9 +36,9 @@ static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status sta
 TWIN_LOOKUP = r"""
 #include "twin_variables.h"
 
-static fmi2ValueReference vr_in(const TwinVariables *table, const char *name) {
+static fmi2ValueReference vr_in(const VariableTable *table, const char *name) {
     for (size_t vr = 0; vr < table->n_real + table->n_integer + table->n_boolean + table->n_string; vr++)
-        if (strcmp(table->variables[vr].name, name) == 0) return (fmi2ValueReference)vr;
+        if (strcmp(table->rows[vr].name, name) == 0) return (fmi2ValueReference)vr;
     fprintf(stderr, "no variable %s\n", name);
     exit(1);
 }
@@ -46,7 +46,7 @@ static fmi2ValueReference vr_in(const TwinVariables *table, const char *name) {
 
 
 def twin_driver(model_header: str, table: str, main: str) -> str:
-    """A driver for a twin whose variables are the TwinVariables ``table`` of ``model_header``;
+    """A driver for a twin whose variables are the VariableTable ``table`` of ``model_header``;
     ``main`` may call vr_of(name)."""
     return (PRELUDE + TWIN_LOOKUP + f'#include "{model_header}"\n#define vr_of(name) vr_in(&{table}, name)\n' + main)
 

@@ -27,9 +27,9 @@ static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status sta
 }
 
 static fmi2ValueReference vr_of(const char *name) {
-    for (size_t vr = 0; vr < sampled_model.n_real + sampled_model.n_integer + sampled_model.n_boolean
-                             + sampled_model.n_string; vr++)
-        if (strcmp(sampled_model.variables[vr].name, name) == 0) return (fmi2ValueReference)vr;
+    for (size_t vr = 0; vr < sampled_model.variables.n_real + sampled_model.variables.n_integer + sampled_model.variables.n_boolean
+                             + sampled_model.variables.n_string; vr++)
+        if (strcmp(sampled_model.variables.rows[vr].name, name) == 0) return (fmi2ValueReference)vr;
     fprintf(stderr, "no variable %s\n", name);
     exit(1);
 }
@@ -55,7 +55,7 @@ int main(void) {
     const fmi2CallbackFunctions callbacks = {logger, calloc, free, NULL, NULL};
     const fmi2ValueReference u = vr_of("u"), y = vr_of("y");
     double out = 0.0, t = 0.0, value;
-    fmi2Component c = fmi2Instantiate("c", fmi2CoSimulation, sampled_model.guid, "", &callbacks, fmi2False, fmi2True);
+    fmi2Component c = fmi2Instantiate("c", fmi2CoSimulation, sampled_model.variables.guid, "", &callbacks, fmi2False, fmi2True);
     if (c == NULL) return 1;
     REFUSED(fmi2DoStep(c, 0.0, 1e-3, fmi2True));                     /* before initialisation */
     CHECK(fmi2Reset(c));

@@ -26,7 +26,7 @@ from shapefmu.runtime.checks import check_size, read_text_file
 
 # The hand-written C shipped with every plant FMU (package data in fmi/native/c/) besides the generic
 # layer of its FMI version: the plants' model part.
-PLANT_SOURCES = ("plant_fmi2.c", "plant_expm.c")
+PLANT_SOURCES = ("plant_part.c", "plant_expm.c")
 PLANT_HEADERS = ("plant_model.h", "plant_expm.h")
 
 

@@ -1,7 +1,7 @@
 """The native C EKFTuner FMU: the pythonfmu EKFTuner's variables and numbers, no Python on the host.
 
 ``build_native_ekf_tuner(out_path, **start_values) -> Path`` writes an FMI 2.0 Co-Simulation FMU:
-the generic FMI 2.0 layer, the EKF tuner's model part (``c/ekf_tuner_fmi2.c``: runtime/ekf_tuner.py's
+the generic FMI 2.0 layer, the EKF tuner's model part (``c/ekf_tuner_part.c``: runtime/ekf_tuner.py's
 EKFTunedShaperKernel; ``c/resonance_ekf.c``: runtime/ekf.py's ResonanceEKF; operation for operation), the
 absolute sample grid (``c/sample_clock.c``), the closed-form designs (``c/shaper_designs.c``) and
 a generated ``model.c`` holding the variables and their start values. Nothing is designed at build
@@ -18,7 +18,7 @@ from pathlib import Path
 from shapefmu.fmi.native.kernel_fmu import designed_twin, twin_variables_c, write_native_fmu
 
 NAME = "EKFTuner"
-SOURCES = ("ekf_tuner_fmi2.c", "resonance_ekf.c", "sample_clock.c", "shaper_designs.c", "twin_variables.c")
+SOURCES = ("ekf_tuner_part.c", "resonance_ekf.c", "sample_clock.c", "shaper_designs.c", "twin_variables.c")
 HEADERS = ("ekf_tuner_model.h", "resonance_ekf.h", "sample_clock.h", "shaper_designs.h", "twin_variables.h")
 MEANINGS = {"kind": "EKF_KIND", "n": "EKF_ORDER", "Ts": "EKF_PERIOD", "omega0": "EKF_OMEGA0",
             "amplitude": "EKF_AMPLITUDE", "retune_fraction": "EKF_RETUNE", "u": "EKF_COMMAND",

@@ -30,8 +30,8 @@ MODEL_SOURCE = "model.c"
 TYPE_ORDER = ("Real", "Integer", "Boolean", "String")
 CATEGORIES = (("logStatusError", "Errors: bad parameters, non-finite inputs, calls out of order"),
               ("logAll", "Everything else (debug logging)"))
-ROLES = {("parameter", "fixed"): "FMI2_PARAMETER_FIXED", ("parameter", "tunable"): "FMI2_PARAMETER_TUNABLE",
-         ("input", "continuous"): "FMI2_INPUT", ("output", "continuous"): "FMI2_COMPUTED"}
+ROLES = {("parameter", "fixed"): "ROLE_PARAMETER_FIXED", ("parameter", "tunable"): "ROLE_PARAMETER_TUNABLE",
+         ("input", "continuous"): "ROLE_INPUT", ("output", "continuous"): "ROLE_COMPUTED"}
 
 
 def number_by_type(variables) -> list:
@@ -62,20 +62,27 @@ def c_doubles(name: str, values) -> str:
     return f"static const double {name}[] = {{\n    {rows or '0.0'}\n}};"
 
 
-def twin_variables_c(table: str, variables, values: dict, meaning_of, guid: str) -> str:
-    """C of the TwinVariables ``table`` (``c/twin_variables.h``): each of the numbered ``variables``
-    with its role, its meaning ``meaning_of(name)`` (an enumerator of the model part) and its start
-    value from ``values``."""
+def variable_rows(variables, values: dict, meaning_of) -> str:
+    """The C rows of a VariableTable (``c/model.h``): each of the numbered ``variables`` with its role,
+    its meaning ``meaning_of(name)`` (an enumerator of the model part) and its start value from ``values``."""
     rows = []
     for var in variables:
         value = values[var.name]
         start, string = ("0.0", c_string(value)) if var.type == "String" else (repr(float(value)), "NULL")
         rows.append(f'    {{"{var.name}", {ROLES[(var.causality, var.variability)]}, {meaning_of(var.name)}, {start}, '
                     f'{string}}},')
-    counts = ", ".join(str(sum(v.type == t for v in variables)) for t in TYPE_ORDER)
-    body = "\n".join(rows)
-    return (f"static const TwinVariable {table}_rows[] = {{\n{body}\n}};\n\n"
-            f'const TwinVariables {table} = {{"{guid}", {counts}, {table}_rows}};\n')
+    return "\n".join(rows)
+
+
+def table_fields(variables, guid: str) -> str:
+    """The GUID and the counts of a VariableTable (``c/model.h``) of the numbered ``variables``."""
+    return f'"{guid}", ' + ", ".join(str(sum(v.type == t for v in variables)) for t in TYPE_ORDER)
+
+
+def twin_variables_c(table: str, variables, values: dict, meaning_of, guid: str) -> str:
+    """C of the VariableTable ``table`` of a twin's model part (``c/model.h``, ``c/twin_variables.h``)."""
+    return (f"static const VariableRow {table}_rows[] = {{\n{variable_rows(variables, values, meaning_of)}\n}};\n\n"
+            f"const VariableTable {table} = {{{table_fields(variables, guid)}, {table}_rows}};\n")
 
 
 def clock_interval(name: str, values: dict, fmi_version: str) -> float:

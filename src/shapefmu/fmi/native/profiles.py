@@ -1,7 +1,7 @@
 """The native C ProfileGenerator FMU: the pythonfmu ProfileGenerator's variables and numbers in C.
 
 ``build_native_profile(out_path, **start_values) -> Path`` writes an FMI 2.0 Co-Simulation FMU: the
-generic FMI 2.0 layer, the generator (``c/motion_fmi2.c``: runtime/motion.py's
+generic FMI 2.0 layer, the generator (``c/motion_part.c``: runtime/motion.py's
 PiecewiseAcceleration.state, the start latch and t_start, operation for operation) and a generated
 ``model.c``: the variables with their start values and the move, designed here by the kind's own
 initialisation (``shapefmu.fmi.kinds``) (a twin-pulse kind of paper 003, time-frequency of paper 004, or a
@@ -23,7 +23,7 @@ from shapefmu.fmi.kinds.profile_generator import MAX_MODES
 from shapefmu.runtime import shaper_designs
 
 NAME = "ProfileGenerator"
-SOURCES = ("motion_fmi2.c", "motion_design.c", "exact_sum.c", "shaper_designs.c", "twin_variables.c")
+SOURCES = ("motion_part.c", "motion_design.c", "exact_sum.c", "shaper_designs.c", "twin_variables.c")
 HEADERS = ("motion_model.h", "motion_design.h", "exact_sum.h", "shaper_designs.h", "twin_variables.h")
 MAX_LEVELS = 1_000_000
 _MEANINGS = {"profile": "MOTION_PROFILE", "distance": "MOTION_DISTANCE", "speed": "MOTION_SPEED",

@@ -1,7 +1,7 @@
 """The native C ReferencePlayer FMU: the pythonfmu ReferencePlayer's variables and numbers in C.
 
 ``build_native_reference(out_path, **start_values) -> Path`` writes an FMI 2.0 Co-Simulation FMU:
-the generic FMI 2.0 layer, the player (``c/table_fmi2.c``: runtime/reference_player.py's
+the generic FMI 2.0 layer, the player (``c/table_part.c``: runtime/reference_player.py's
 SignalTable value, integral and step average, operation for operation) and a generated
 ``model.c`` holding the table as the kind's model parsed it here (its distinct times, the values
 arriving at and leaving each, the running integral, the snap tolerance) and the table's JSON text,
@@ -19,7 +19,7 @@ from shapefmu.fmi.native.kernel_fmu import c_doubles, designed_twin, write_nativ
 from shapefmu.fmi.description import check_xml_string
 
 NAME = "ReferencePlayer"
-SOURCES = ("table_fmi2.c",)
+SOURCES = ("table_part.c",)
 HEADERS = ("table_model.h",)
 MAX_TABLE_TIMES = 1_000_000
 MAX_TABLE_TEXT = 16_000_000  # bytes

@@ -1,7 +1,7 @@
 """The native C STOSController FMU: the pythonfmu STOSController's variables and numbers in C.
 
 ``build_native_stos(out_path, **start_values) -> Path`` writes an FMI 2.0 Co-Simulation FMU: the
-generic FMI 2.0 layer, the STOS model part (``c/stos_fmi2.c``: sampled semantics, feed-through,
+generic FMI 2.0 layer, the STOS model part (``c/stos_part.c``: sampled semantics, feed-through,
 FMU state), the law (``c/stos_law.c``: runtime/stos.py's locate, sub-sample switching and settle
 hand-over, operation for operation), the absolute sample grid (``c/sample_clock.c``) and a
 generated ``model.c``: the variables with their start values and the build's shaper, designed here
@@ -22,7 +22,7 @@ from shapefmu.fmi.native.kernel_fmu import c_doubles, designed_twin, twin_variab
 from shapefmu.fmi.native.sampled import CLOSED_FORM
 
 NAME = "STOSController"
-SOURCES = ("stos_fmi2.c", "stos_law.c", "exact_sum.c", "sample_clock.c", "shaper_designs.c", "twin_variables.c")
+SOURCES = ("stos_part.c", "stos_law.c", "exact_sum.c", "sample_clock.c", "shaper_designs.c", "twin_variables.c")
 HEADERS = ("stos_model.h", "stos_law.h", "exact_sum.h", "sample_clock.h", "shaper_designs.h", "twin_variables.h")
 _MEANINGS = {"b": "STOS_B", "U": "STOS_U", "damping": "STOS_DAMPING", "kind": "STOS_KIND", "n": "STOS_ORDER",
              "n_modes": "STOS_MODES", **{f"f[{i}]": f"STOS_F{i}" for i in range(1, 5)},

@@ -28,12 +28,12 @@ extern const double fmi3_clock_interval;
 
 int fmi3_clocked(void) { return fmi3_clock_interval > 0.0; }
 
-static fmi3ValueReference clock_reference(const Fmi2Instance *inst) {
+static fmi3ValueReference clock_reference(const ModelInstance *inst) {
     return (fmi3ValueReference)(layer_of(inst)->n_variables + 1);
 }
 
 /* The number of ticks at or before tau (K(tau) + 1 of the sample grid). */
-static double ticks_until(const Fmi2Instance *inst, double tau) {
+static double ticks_until(const ModelInstance *inst, double tau) {
     const double ts = fmi3_clock_interval, t0 = inst->start_time, delta = CLOCK_TOLERANCE * ts;
     double k = floor((tau - t0) / ts + CLOCK_TOLERANCE);
     if (t0 + (k + 1.0) * ts <= tau + delta) k += 1.0;
@@ -41,26 +41,26 @@ static double ticks_until(const Fmi2Instance *inst, double tau) {
     return k + 1.0;
 }
 
-static int on_tick(const Fmi2Instance *inst, double tau, double k) {
+static int on_tick(const ModelInstance *inst, double tau, double k) {
     return fabs(tau - (inst->start_time + k * fmi3_clock_interval)) <= CLOCK_TOLERANCE * fmi3_clock_interval;
 }
 
-fmi3Status fmi3_clock_start(Fmi2Instance *inst, const char *function) {
+fmi3Status fmi3_clock_start(ModelInstance *inst, const char *function) {
     if (!layer_of(inst)->clocked) return fmi3OK;
     const size_t period_slot = layer_of(inst)->period_slot;
-    if (model_update(inst, function) != fmi2OK) return fmi3Error;
+    if (model_update(inst, function) != MODEL_OK) return fmi3Error;
     const double ts = inst->reals[period_slot];
     if (fabs(ts - fmi3_clock_interval) > 1e-12 * fmi3_clock_interval) {
         const char *name = "Ts";
-        model_variable(inst, FMI2_REAL, period_slot, &name);
+        model_variable(inst, TYPE_REAL, period_slot, &name);
         return FAIL("%s: %s = %.17g, but this FMU's clock 'sample' ticks every %.17g s (its modelDescription.xml): "
                     "rebuild it with --clock for another sample period", function, name, ts, fmi3_clock_interval);
     }
-    inst->mode = FMI2_EVENT_MODE;  /* Co-Simulation with Event Mode starts in Event Mode: the tick at t0 */
+    inst->mode = MODE_EVENT;  /* Co-Simulation with Event Mode starts in Event Mode: the tick at t0 */
     return fmi3OK;
 }
 
-fmi3Status fmi3_clock_before_step(Fmi2Instance *inst, double t, double h) {
+fmi3Status fmi3_clock_before_step(ModelInstance *inst, double t, double h) {
     const double due = ticks_until(inst, t);
     if (inst->clock_ticks < due)
         return FAIL("fmi3DoStep: the clock 'sample' was not ticked at t = %.17g (enter Event Mode and call fmi3SetClock "
@@ -73,14 +73,14 @@ fmi3Status fmi3_clock_before_step(Fmi2Instance *inst, double t, double h) {
     return fmi3OK;
 }
 
-fmi3Status fmi3_clock_before_step_mode(Fmi2Instance *inst) {
+fmi3Status fmi3_clock_before_step_mode(ModelInstance *inst) {
     if (!layer_of(inst)->clocked || inst->clock_ticks >= ticks_until(inst, inst->time)) return fmi3OK;
     return FAIL("fmi3EnterStepMode: t = %.17g is a tick of the clock 'sample', which was not set (fmi3SetClock) in "
                 "this Event Mode", inst->time);
 }
 
 fmi3Status fmi3SetClock(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, const fmi3Clock values[]) {
-    ENTER(instance, FMI2_EVENT_MODE, "fmi3SetClock");
+    ENTER(instance, MODE_EVENT, "fmi3SetClock");
     ENTER_ARRAY(vr, nvr, "fmi3SetClock");
     ENTER_ARRAY(values, nvr, "fmi3SetClock");
     for (size_t i = 0; i < nvr; i++) {
