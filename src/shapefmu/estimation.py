@@ -153,12 +153,9 @@ def estimate_mode(
 
     Examples
     --------
-    >>> import math
-    >>> import numpy as np
-    >>> fs, f, zeta = 1000.0, 10.0, 0.02  # a 10 Hz ring-down, 2 % damping, 2 s at 1 kHz
-    >>> t = np.arange(2000) / fs
-    >>> sigma, omega_d = 2 * math.pi * f * zeta, 2 * math.pi * f * math.sqrt(1 - zeta**2)
-    >>> y = np.exp(-sigma * t) * np.cos(omega_d * t)
+    >>> import math, numpy as np
+    >>> fs, t, omega_d = 1000.0, np.arange(2000) / 1000.0, 2 * math.pi * 10.0 * math.sqrt(1 - 0.02**2)
+    >>> y = np.exp(-2 * math.pi * 10.0 * 0.02 * t) * np.cos(omega_d * t)  # 10 Hz, 2 % damping, 2 s at 1 kHz
     >>> e = estimate_mode(y, fs, 0.9 * omega_d)  # from a guess 10 % low
     >>> round(e.omega_n / (2 * math.pi), 3), round(e.zeta, 3), e.converged
     (10.0, 0.02, True)
@@ -188,32 +185,18 @@ class ModeEstimator:
 
     Examples
     --------
-    >>> import math
-    >>> import numpy as np
-    >>> fs, f, zeta = 1000.0, 10.0, 0.02  # a 10 Hz ring-down, 2 % damping, 2 s at 1 kHz
-    >>> t = np.arange(2000) / fs
-    >>> sigma, omega_d = 2 * math.pi * f * zeta, 2 * math.pi * f * math.sqrt(1 - zeta**2)
-    >>> y = np.exp(-sigma * t) * np.cos(omega_d * t)
+    >>> import math, numpy as np
+    >>> fs, t, omega_d = 1000.0, np.arange(2000) / 1000.0, 2 * math.pi * 10.0 * math.sqrt(1 - 0.02**2)
+    >>> y = np.exp(-2 * math.pi * 10.0 * 0.02 * t) * np.cos(omega_d * t)  # 10 Hz, 2 % damping, 2 s at 1 kHz
     >>> estimator = ModeEstimator(fs, 0.9 * omega_d)
     >>> converged = [estimator.update(sample) for sample in y]
     >>> converged[-1], round(estimator.estimate().omega_n / (2 * math.pi), 2)
     (True, 10.0)
     """
 
-    def __init__(
-        self,
-        fs: float,
-        omega0: float,
-        sigma0: float = 0.0,
-        *,
-        amplitude: float = 1.0,
-        q=None,
-        r: float | None = None,
-        p0=None,
-        omega_tol: float = 2e-3,
-        sigma_tol: float = 5e-3,
-        record: bool = True,
-    ):
+    def __init__(self, fs: float, omega0: float, sigma0: float = 0.0, *, amplitude: float = 1.0, q=None,
+                 r: float | None = None, p0=None, omega_tol: float = 2e-3, sigma_tol: float = 5e-3,
+                 record: bool = True):
         fs, omega0, options = _ekf_options(fs, omega0, sigma0, amplitude, q, r, p0, omega_tol, sigma_tol)
         self.ekf = ResonanceEKF(fs, omega0, **options)
         self._history = [] if record else None
@@ -250,12 +233,9 @@ def log_decrement_zeta(y, fs: float, omega_d: float, periods: int | None = None)
 
     Examples
     --------
-    >>> import math
-    >>> import numpy as np
-    >>> fs, f, zeta = 1000.0, 10.0, 0.02  # a 10 Hz ring-down, 2 % damping, 2 s at 1 kHz
-    >>> t = np.arange(2000) / fs
-    >>> sigma, omega_d = 2 * math.pi * f * zeta, 2 * math.pi * f * math.sqrt(1 - zeta**2)
-    >>> y = np.exp(-sigma * t) * np.cos(omega_d * t)
+    >>> import math, numpy as np
+    >>> fs, t, omega_d = 1000.0, np.arange(2000) / 1000.0, 2 * math.pi * 10.0 * math.sqrt(1 - 0.02**2)
+    >>> y = np.exp(-2 * math.pi * 10.0 * 0.02 * t) * np.cos(omega_d * t)  # 10 Hz, 2 % damping, 2 s at 1 kHz
     >>> round(log_decrement_zeta(y, fs, omega_d), 3)
     0.02
     """
@@ -295,12 +275,9 @@ class EKFTunedShaper:
 
     Examples
     --------
-    >>> import math
-    >>> import numpy as np
-    >>> fs, f, zeta = 1000.0, 10.0, 0.02  # a 10 Hz ring-down, 2 % damping, 2 s at 1 kHz
-    >>> t = np.arange(2000) / fs
-    >>> sigma, omega_d = 2 * math.pi * f * zeta, 2 * math.pi * f * math.sqrt(1 - zeta**2)
-    >>> y = np.exp(-sigma * t) * np.cos(omega_d * t)
+    >>> import math, numpy as np
+    >>> fs, t, omega_d = 1000.0, np.arange(2000) / 1000.0, 2 * math.pi * 10.0 * math.sqrt(1 - 0.02**2)
+    >>> y = np.exp(-2 * math.pi * 10.0 * 0.02 * t) * np.cos(omega_d * t)  # 10 Hz, 2 % damping, 2 s at 1 kHz
     >>> tuner = EKFTunedShaper(fs, 0.9 * omega_d)  # ZVD for what the EKF finds
     >>> shaped = tuner.run(np.zeros(y.size), y)
     >>> tuner.designs, len(tuner.shaper), round(tuner.shaper.duration, 3)  # one damped period

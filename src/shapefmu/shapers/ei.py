@@ -54,10 +54,10 @@ def ei3(omega: float, zeta: float = 0.0, vtol: float = 0.05) -> ImpulseShaper:
 
     Examples
     --------
-    >>> import math
-    >>> s = ei3(2 * math.pi)
-    >>> len(s), s.duration, round(s.gain, 12)
-    (5, 2.0, 1.0)
+    >>> from math import pi
+    >>> from shapefmu.analysis import residual_vibration
+    >>> round(residual_vibration(ei3(2 * pi), 2 * pi, 0.0), 12)  # the middle hump, vtol at omega
+    0.05
     """
     return _shaper(runtime_ei.ei3(omega, zeta, vtol))
 

@@ -192,7 +192,6 @@ def tp(omega_n, distance, speed, *, ts=None, pulse_width=None) -> TwinPulseProfi
 
     Examples
     --------
-    >>> import math
     >>> d = tp(3.5, 1.7, 0.7)  # paper 003's pendula: t_TP = pi / omega_n, t_TZ = d / v
     >>> math.isclose(d.t_tp, math.pi / 3.5), math.isclose(d.t_tz, 1.7 / 0.7)
     (True, True)
@@ -208,7 +207,6 @@ def tp_bc(omega_n, distance, speed, *, null=2, ts=None) -> TwinPulseProfile:
 
     Examples
     --------
-    >>> import math
     >>> d = tp_bc(3.5, 1.7, 0.7)  # k = 2: t_TP = 3 pi / omega_n, t_BC = 2 pi / omega_n
     >>> math.isclose(d.t_tp, 3 * math.pi / 3.5), math.isclose(d.t_bc, 2 * math.pi / 3.5), float(d.magnitude(3.5)) < 1e-15
     (True, True, True)
@@ -224,7 +222,6 @@ def m_tp_bc(omega_n, distance, speed, *, delta_omega=None, attenuation=None, ts=
 
     Examples
     --------
-    >>> import math
     >>> d = m_tp_bc(3.5, 1.7, 0.7, delta_omega=0.2)
     >>> math.isclose(d.t_tp, math.pi / 3.3), math.isclose(d.t_bc, 2 * math.pi / 3.7)
     (True, True)
@@ -237,7 +234,6 @@ def m_bc_tp(omega_n, distance, speed, *, delta_omega=None, attenuation=None, ts=
 
     Examples
     --------
-    >>> import math
     >>> d = m_bc_tp(3.5, 1.7, 0.7, delta_omega=0.2)
     >>> math.isclose(d.t_bc, 2 * math.pi / 3.3), math.isclose(d.t_tp, math.pi / 3.7)
     (True, True)
@@ -250,7 +246,6 @@ def bc_vr(omega_n, distance, speed, *, ts=None) -> TwinPulseProfile:
 
     Examples
     --------
-    >>> import math
     >>> d = bc_vr(3.5, 1.7, 0.7)
     >>> math.isclose(d.t_bc, 2 * math.pi / 3.5), d.t_tp, float(d.magnitude(3.5)) < 1e-15
     (True, 0.0, True)
@@ -263,7 +258,6 @@ def bc_tz(omega_n, distance, speed, *, ts=None) -> TwinPulseProfile:
 
     Examples
     --------
-    >>> import math
     >>> d = bc_tz(3.5, 1.7, 0.7)  # k = 2: t_TZ = 2 pi k / omega_n, slew d / t_TZ
     >>> d.null, math.isclose(d.t_tz, 4 * math.pi / 3.5), math.isclose(d.slew_speed, 1.7 / d.t_tz)
     (2, True, True)
@@ -278,7 +272,6 @@ def m_bc_tz(omega_n, distance, speed, *, delta_omega=None, attenuation=None, ts=
 
     Examples
     --------
-    >>> import math
     >>> d = m_bc_tz(3.5, 1.7, 0.7, delta_omega=0.2)  # k = ceil(1.7 * 3.7 / (2 pi 0.7)) = 2
     >>> d.null, math.isclose(d.t_bc, 2 * math.pi / 3.3), math.isclose(d.t_tz, 4 * math.pi / 3.7)
     (2, True, True)
@@ -291,7 +284,6 @@ def m_tz_bc(omega_n, distance, speed, *, delta_omega=None, attenuation=None, ts=
 
     Examples
     --------
-    >>> import math
     >>> d = m_tz_bc(3.5, 1.7, 0.7, delta_omega=0.2)
     >>> math.isclose(d.t_bc, 2 * math.pi / 3.7), math.isclose(d.t_tz, 2 * math.pi * d.null / 3.3)
     (True, True)
@@ -319,7 +311,6 @@ def m_tp_tz_bc(omega_n, distance, speed, *, delta_omega=None, attenuation=None, 
 
     Examples
     --------
-    >>> import math
     >>> d = m_tp_tz_bc(3.5, 1.7, 0.7, delta_omega=0.2)
     >>> math.isclose(d.t_tp, math.pi / 3.3), math.isclose(d.t_bc, 2 * math.pi / 3.7), float(d.magnitude(3.5)) < 1e-15
     (True, True, True)

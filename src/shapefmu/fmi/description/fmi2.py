@@ -10,14 +10,9 @@ from __future__ import annotations
 
 from xml.etree.ElementTree import Element, SubElement, indent, tostring
 
+from shapefmu.fmi.description.common import header, number, quantity
 from shapefmu.fmi.description.model import ModelDescription
-from shapefmu.fmi.description.units import base_units
 from shapefmu.fmi.description.xml_text import check_attributes
-
-
-def number(value) -> str:
-    """A start, min or max as the standard writes it: a Real's exact repr, an Integer's digits."""
-    return repr(float(value)) if isinstance(value, float) else str(value)
 
 
 def _flag(value: bool) -> str:
@@ -42,19 +37,9 @@ def _interfaces(root: Element, md: ModelDescription) -> None:
 def _typed(variable, index_of) -> dict:
     typed = {}
     if variable.start is not None:
-        typed["start"] = _flag(variable.start) if variable.type == "Boolean" else number(variable.start)
-    if variable.type == "Real" and variable.unit:
-        typed["unit"] = variable.unit
-    if variable.nominal is not None:
-        typed["nominal"] = repr(float(variable.nominal))
-    if variable.derivative_of is not None:
-        typed["derivative"] = str(index_of[variable.derivative_of])
-    if variable.type in ("Real", "Integer"):
-        if variable.minimum is not None:
-            typed["min"] = number(variable.minimum)
-        if variable.maximum is not None:
-            typed["max"] = number(variable.maximum)
-    return typed
+        start = variable.start
+        typed["start"] = _flag(start) if variable.type == "Boolean" else start if variable.type == "String" else number(start)
+    return typed | quantity(variable, index_of)
 
 
 def write(md: ModelDescription) -> str:
@@ -67,19 +52,7 @@ def write(md: ModelDescription) -> str:
         if not root.get(optional):
             del root.attrib[optional]
     _interfaces(root, md)
-    if md.units():
-        definitions = SubElement(root, "UnitDefinitions")
-        for name in md.units():
-            unit = SubElement(definitions, "Unit", {"name": name})
-            if base_units(name):
-                SubElement(unit, "BaseUnit", base_units(name))
-    categories = SubElement(root, "LogCategories")
-    for name, text in md.log_categories:
-        SubElement(categories, "Category", {"name": name, **({"description": text} if text else {})})
-    if md.experiment is not None:
-        start, stop, step = md.experiment
-        SubElement(root, "DefaultExperiment",
-                   {"startTime": number(start), "stopTime": number(stop), "stepSize": number(step)})
+    header(root, md)
     listed = [(vr, v) for vr, v in enumerate(md.variables) if v.causality != "independent"]
     index_of = {v.name: position for position, (_, v) in enumerate(listed, 1)}
     variables = SubElement(root, "ModelVariables")

@@ -19,8 +19,8 @@ import re
 from dataclasses import dataclass, field
 from xml.etree.ElementTree import Element, SubElement, indent, tostring
 
+from shapefmu.fmi.description.common import header, quantity
 from shapefmu.fmi.description.model import ModelDescription
-from shapefmu.fmi.description.units import base_units
 from shapefmu.fmi.description.xml_text import check_attributes, check_xml_string
 from shapefmu.fmi.kinds.interface import Variable
 
@@ -77,10 +77,6 @@ def variables3(variables) -> list[Variable3]:
     return found
 
 
-def _number(value) -> str:
-    return repr(float(value)) if isinstance(value, float) else str(int(value))
-
-
 def _value(v: Variable, value) -> str:
     if v.type == "Boolean":
         return "true" if value else "false"
@@ -95,17 +91,7 @@ def _variable_element(parent, variable: Variable3, vr_of: dict, clock_vr: int | 
         attributes.update(variability="discrete", clocks=str(clock_vr))
     if v.initial:
         attributes["initial"] = v.initial
-    if v.type == "Real" and v.unit:
-        attributes["unit"] = v.unit
-    if v.nominal is not None:
-        attributes["nominal"] = repr(float(v.nominal))
-    if v.derivative_of is not None:
-        attributes["derivative"] = str(vr_of[v.derivative_of])
-    if v.type in ("Real", "Integer"):
-        if v.minimum is not None:
-            attributes["min"] = _number(v.minimum)
-        if v.maximum is not None:
-            attributes["max"] = _number(v.maximum)
+    attributes.update(quantity(v, vr_of))
     if v.start is not None and v.type != "String":
         attributes["start"] = " ".join(_value(e, e.start) for e in variable.elements)
     if not attributes["description"]:
@@ -137,19 +123,7 @@ def write(md: ModelDescription) -> str:
         SubElement(root, "ModelExchange", common)
     SubElement(root, "CoSimulation", {**common, "canHandleVariableCommunicationStepSize": "true",
                                       "hasEventMode": "true" if md.clock_interval else "false"})
-    if md.units():
-        definitions = SubElement(root, "UnitDefinitions")
-        for name in md.units():
-            unit = SubElement(definitions, "Unit", {"name": name})
-            if base_units(name):
-                SubElement(unit, "BaseUnit", base_units(name))
-    categories = SubElement(root, "LogCategories")
-    for name, text in md.log_categories:
-        SubElement(categories, "Category", {"name": name, **({"description": text} if text else {})})
-    if md.experiment is not None:
-        start, stop, step = md.experiment
-        SubElement(root, "DefaultExperiment", {"startTime": _number(start), "stopTime": _number(stop),
-                                               "stepSize": _number(step)})
+    header(root, md)
     model_variables = SubElement(root, "ModelVariables")
     SubElement(model_variables, "Float64", {"name": "time", "valueReference": "0", "causality": "independent",
                                             "variability": "continuous", "description": "simulation time"})
