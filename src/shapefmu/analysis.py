@@ -25,6 +25,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from shapefmu.runtime.checks import check_finite, check_positive, check_vtol, check_zeta
+from shapefmu.runtime.units import RadPerSecond
 
 DEFINITIONS = ("percent", "absolute")
 
@@ -59,7 +60,7 @@ def _omega_array(omega, name="omega") -> np.ndarray:
     return w
 
 
-def residual_vibration(shaper, omega, zeta: float, definition: str = "percent") -> np.ndarray:
+def residual_vibration(shaper, omega: RadPerSecond, zeta: float, definition: str = "percent") -> np.ndarray:
     """Residual vibration of a mode (omega, zeta) after the impulse sequence, vectorised over omega.
 
     Returns an array shaped like ``omega`` (a float for a scalar). See the module docstring for the
@@ -120,7 +121,7 @@ class SensitivityCurve:
     definition: str
 
 
-def sensitivity(shaper, omega_model: float, zeta: float, q=None, definition: str = "percent") -> SensitivityCurve:
+def sensitivity(shaper, omega_model: RadPerSecond, zeta: float, q=None, definition: str = "percent") -> SensitivityCurve:
     """Sensitivity curve (paper 000, eq. 4 / 5 with omega = q * omega_model); q defaults to 0..2.
 
     Examples
@@ -156,7 +157,7 @@ class InsensitiveBand:
         return self.q_high - self.q_low
 
 
-def insensitivity(shaper, omega: float, zeta: float, vtol: float = 0.05, q_max: float = 10.0) -> InsensitiveBand:
+def insensitivity(shaper, omega: RadPerSecond, zeta: float, vtol: float = 0.05, q_max: float = 10.0) -> InsensitiveBand:
     """The band of q = omega_actual/omega around q = 1 where the percent residual stays <= vtol.
 
     A curve that touches vtol from below (the humps of EI shapers, exactly vtol by design) does not
@@ -222,7 +223,7 @@ def _upper_bound(shaper, omega, zeta) -> float:
     return float(np.sum(np.abs(a) * np.exp(zeta * omega * (t - t[-1]))) / abs(a.sum()))
 
 
-def spectrum(shaper, omega) -> np.ndarray:
+def spectrum(shaper, omega: RadPerSecond) -> np.ndarray:
     """Frequency response H(j omega) = sum_k A_k e^{-j omega t_k}, vectorised over omega (rad/s).
 
     Examples

@@ -28,6 +28,7 @@ from shapefmu.analysis import log_decrement_damping
 from shapefmu.runtime.checks import check_count, check_finite, check_positive
 from shapefmu.runtime.ekf import ResonanceEKF
 from shapefmu.runtime.ekf_tuner import KINDS, EKFTunedShaperKernel
+from shapefmu.runtime.units import RadPerSecond
 from shapefmu.shapers import ImpulseShaper
 
 __all__ = [
@@ -126,7 +127,7 @@ def _run(ekf: ResonanceEKF, y: np.ndarray) -> np.ndarray:
 def estimate_mode(
     y,
     fs: float,
-    omega0: float,
+    omega0: RadPerSecond,
     sigma0: float = 0.0,
     *,
     amplitude: float | None = None,
@@ -194,7 +195,7 @@ class ModeEstimator:
     (True, 10.0)
     """
 
-    def __init__(self, fs: float, omega0: float, sigma0: float = 0.0, *, amplitude: float = 1.0, q=None,
+    def __init__(self, fs: float, omega0: RadPerSecond, sigma0: float = 0.0, *, amplitude: float = 1.0, q=None,
                  r: float | None = None, p0=None, omega_tol: float = 2e-3, sigma_tol: float = 5e-3,
                  record: bool = True):
         fs, omega0, options = _ekf_options(fs, omega0, sigma0, amplitude, q, r, p0, omega_tol, sigma_tol)
@@ -224,7 +225,7 @@ class ModeEstimator:
         return ModeEstimate(e.omega_d, e.sigma, e.omega_n, e.zeta, history, e.converged, e.missing, e.resets)
 
 
-def log_decrement_zeta(y, fs: float, omega_d: float, periods: int | None = None) -> float:
+def log_decrement_zeta(y, fs: float, omega_d: RadPerSecond, periods: int | None = None) -> float:
     """Damping ratio of a ring-down by the log-decrement of eq. (31), from its positive peaks.
 
     Peaks are taken one per damped period (2 pi / omega_d) from the start of ``y``, each refined by
@@ -287,7 +288,7 @@ class EKFTunedShaper:
     def __init__(
         self,
         fs: float,
-        omega0: float,
+        omega0: RadPerSecond,
         shaper: str | ShaperDesign = "zvd",
         *,
         n: int = 1,
@@ -304,7 +305,7 @@ class EKFTunedShaper:
         if callable(shaper):
             design = shaper
 
-            def kind(omega_n, zeta):
+            def kind(omega_n: RadPerSecond, zeta):
                 s = design(omega_n, zeta)
                 return list(s.times), list(s.amplitudes)
 

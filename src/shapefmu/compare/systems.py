@@ -22,14 +22,14 @@ def signal_table(command) -> str:
 
 
 def modes_hz(plant) -> dict:
+    """The Shaper's and the STOS controller's start values for the plant's flexible modes."""
+    from shapefmu.fmi.kinds.shaper import MAX_MODES, mode_start_values
+
     modes = plant.flexible_modes()
-    if not 1 <= len(modes) <= 4:
-        raise ValueError(f"plant {plant.name!r} must have 1 to 4 flexible modes for the shaper FMUs, got {len(modes)}")
-    values = {"n_modes": len(modes)}
-    for i, (omega, zeta) in enumerate(modes, start=1):
-        values[f"f[{i}]"] = omega / (2.0 * math.pi)
-        values[f"zeta[{i}]"] = zeta
-    return values
+    if not 1 <= len(modes) <= MAX_MODES:
+        raise ValueError(f"plant {plant.name!r} must have 1 to {MAX_MODES} flexible modes for the shaper FMUs, "
+                         f"got {len(modes)}")
+    return mode_start_values([(omega / (2.0 * math.pi), zeta) for omega, zeta in modes])
 
 
 def mode_arrays(modes: dict, fmu) -> dict:

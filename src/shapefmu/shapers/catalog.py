@@ -5,10 +5,11 @@ rules every command that designs for measured modes shares: the damping a shaper
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 
 from shapefmu.runtime import shaper_designs
 from shapefmu.runtime.checks import aliased_modes, check_count, check_positive, check_vtol
+from shapefmu.runtime.units import Hz
 from shapefmu.shapers.ei import ei, ei2, ei3
 from shapefmu.shapers.impulse import ImpulseShaper, mzv, um_zv, zv, zv_dn, zvd, zvdd
 from shapefmu.shapers.multimode import Mode, check_modes, convolve_modes, simultaneous
@@ -99,7 +100,7 @@ def design_zeta(zeta: float) -> float:
     return min(zeta, MAX_DESIGN_ZETA)
 
 
-def default_sampling_period(frequencies_hz) -> float:
+def default_sampling_period(frequencies_hz: Iterable[Hz]) -> float:
     """The sampling period (s) of a sampled shaper for modes at ``frequencies_hz`` (Hz) when none is
     given: ``SAMPLES_PER_PERIOD`` samples per period of the highest.
 

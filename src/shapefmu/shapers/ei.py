@@ -16,10 +16,11 @@ from __future__ import annotations
 
 from shapefmu.runtime import ei as runtime_ei
 from shapefmu.runtime.ei import NU_MAX, VTOL_MAX, VTOL_MIN, ZETA_MAX  # noqa: F401  (the limits, re-exported)
+from shapefmu.runtime.units import RadPerSecond
 from shapefmu.shapers.impulse import ImpulseShaper
 
 
-def ei(omega: float, zeta: float = 0.0, vtol: float = 0.05) -> ImpulseShaper:
+def ei(omega: RadPerSecond, zeta: float = 0.0, vtol: float = 0.05) -> ImpulseShaper:
     """Extra-insensitive shaper: 3 impulses over one damped period, V(omega) = vtol.
 
     Undamped it is (1+V)/4, (1-V)/2, (1+V)/4 at 0, T/2, T; with damping the constraints in the
@@ -36,7 +37,7 @@ def ei(omega: float, zeta: float = 0.0, vtol: float = 0.05) -> ImpulseShaper:
     return _shaper(runtime_ei.ei(omega, zeta, vtol))
 
 
-def ei2(omega: float, zeta: float = 0.0, vtol: float = 0.05) -> ImpulseShaper:
+def ei2(omega: RadPerSecond, zeta: float = 0.0, vtol: float = 0.05) -> ImpulseShaper:
     """Two-hump EI: 4 impulses over 1.5 periods, zero at omega, humps of vtol either side.
 
     Examples
@@ -49,7 +50,7 @@ def ei2(omega: float, zeta: float = 0.0, vtol: float = 0.05) -> ImpulseShaper:
     return _shaper(runtime_ei.ei2(omega, zeta, vtol))
 
 
-def ei3(omega: float, zeta: float = 0.0, vtol: float = 0.05) -> ImpulseShaper:
+def ei3(omega: RadPerSecond, zeta: float = 0.0, vtol: float = 0.05) -> ImpulseShaper:
     """Three-hump EI: 5 impulses over 2 periods, humps of vtol at omega and either side.
 
     Examples

@@ -16,6 +16,7 @@ import numpy as np
 from shapefmu.runtime import impulse_formulas
 from shapefmu.runtime.checks import check_finite
 from shapefmu.runtime.shaper_filter import grid_impulses
+from shapefmu.runtime.units import RadPerSecond
 
 # Impulses closer than this (relative to the shaper's duration) are one impulse: convolution
 # produces coincident times, e.g. T1 + T2 == T2 + T1.
@@ -139,7 +140,7 @@ def _shaper(pair) -> ImpulseShaper:
     return ImpulseShaper(tuple(times), tuple(amplitudes))
 
 
-def zv(omega: float, zeta: float = 0.0) -> ImpulseShaper:
+def zv(omega: RadPerSecond, zeta: float = 0.0) -> ImpulseShaper:
     """Zero-vibration shaper (paper 002, eq. 3): two impulses half a damped period apart.
 
     ``omega`` (rad/s) is the undamped natural frequency, ``zeta`` the damping ratio.
@@ -157,7 +158,7 @@ def zv(omega: float, zeta: float = 0.0) -> ImpulseShaper:
     return _shaper(impulse_formulas.zv_dn(omega, zeta, 0))
 
 
-def zvd(omega: float, zeta: float = 0.0) -> ImpulseShaper:
+def zvd(omega: RadPerSecond, zeta: float = 0.0) -> ImpulseShaper:
     """Zero-vibration-derivative shaper: ZV convolved with itself (one period long).
 
     Examples
@@ -169,7 +170,7 @@ def zvd(omega: float, zeta: float = 0.0) -> ImpulseShaper:
     return _shaper(impulse_formulas.zv_dn(omega, zeta, 1))
 
 
-def zvdd(omega: float, zeta: float = 0.0) -> ImpulseShaper:
+def zvdd(omega: RadPerSecond, zeta: float = 0.0) -> ImpulseShaper:
     """ZVDD shaper: ZV convolved three times (1.5 periods long).
 
     Examples
@@ -182,7 +183,7 @@ def zvdd(omega: float, zeta: float = 0.0) -> ImpulseShaper:
     return _shaper(impulse_formulas.zv_dn(omega, zeta, 2))
 
 
-def zv_dn(omega: float, zeta: float, n: int) -> ImpulseShaper:
+def zv_dn(omega: RadPerSecond, zeta: float, n: int) -> ImpulseShaper:
     """ZV convolved n+1 times: residual and its first n frequency derivatives vanish at omega.
 
     Amplitudes C(n+1, i) K^i / (1+K)^(n+1) at i*pi/omega_d, K = exp(-zeta*pi/sqrt(1-zeta^2)).
@@ -196,7 +197,7 @@ def zv_dn(omega: float, zeta: float, n: int) -> ImpulseShaper:
     return _shaper(impulse_formulas.zv_dn(omega, zeta, n))
 
 
-def mzv(omega: float, zeta: float = 0.0) -> ImpulseShaper:
+def mzv(omega: RadPerSecond, zeta: float = 0.0) -> ImpulseShaper:
     """Three impulses over 0.75 of the damped period (spacing 3*pi/(4*omega_d)).
 
     Amplitudes (1, sqrt(2) K, K^2)/(1 + sqrt(2) K + K^2), K = exp(-zeta*omega*3*pi/(4*omega_d)),
@@ -212,7 +213,7 @@ def mzv(omega: float, zeta: float = 0.0) -> ImpulseShaper:
     return _shaper(impulse_formulas.mzv(omega, zeta))
 
 
-def um_zv(omega: float, zeta: float = 0.0) -> ImpulseShaper:
+def um_zv(omega: RadPerSecond, zeta: float = 0.0) -> ImpulseShaper:
     """Unity-magnitude ZV: +1, -1, +1 at 0, ~T/6, ~T/3, times solved exactly for the damping.
 
     Examples

@@ -11,9 +11,10 @@ from collections.abc import Callable, Sequence
 from shapefmu.runtime import multimode
 from shapefmu.runtime.multimode import check_modes
 from shapefmu.runtime.shaper_designs import check_impulse_count
+from shapefmu.runtime.units import RadPerSecond
 from shapefmu.shapers.impulse import ImpulseShaper, zv
 
-Mode = tuple[float, float]
+Mode = tuple[RadPerSecond, float]  # (omega, zeta)
 
 
 def convolve_modes(

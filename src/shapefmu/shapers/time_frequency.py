@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from shapefmu.runtime import time_frequency
+from shapefmu.runtime.units import RadPerSecond
 from shapefmu.shapers.profile import MotionProfile, from_acceleration
 from shapefmu.shapers.sampled import SampledShaper
 
@@ -68,7 +69,7 @@ def scale_bounds(ts: float, move_time: float) -> tuple[float, float]:
     return time_frequency.scale_bounds(ts, move_time)
 
 
-def energy_leakage(n: float, first_resonance: float, ts: float, move_time: float) -> float:
+def energy_leakage(n: float, first_resonance: RadPerSecond, ts: float, move_time: float) -> float:
     """1 - J (paper 004, eq. 18-19): share of the energy of g_{phi,n} above omega_0 = Omega_0 Ts.
 
     Parameters
@@ -95,7 +96,7 @@ def energy_leakage(n: float, first_resonance: float, ts: float, move_time: float
     return time_frequency.energy_leakage(n, first_resonance, ts, move_time)
 
 
-def optimal_scale(first_resonance: float, ts: float, move_time: float, bounds=None) -> tuple[float, float]:
+def optimal_scale(first_resonance: RadPerSecond, ts: float, move_time: float, bounds=None) -> tuple[float, float]:
     """The n minimising 1 - J (eq. 20) by bounded scalar minimisation, and that minimum.
 
     ``bounds`` defaults to :func:`scale_bounds`. The paper uses Matlab's ``fminbnd``; this is
@@ -111,7 +112,7 @@ def optimal_scale(first_resonance: float, ts: float, move_time: float, bounds=No
     return time_frequency.optimal_scale(first_resonance, ts, move_time, bounds)
 
 
-def tradeoff_curve(first_resonance: float, ts: float, move_times) -> tuple[np.ndarray, np.ndarray]:
+def tradeoff_curve(first_resonance: RadPerSecond, ts: float, move_times) -> tuple[np.ndarray, np.ndarray]:
     """Optimal n and minimal 1 - J against move time (paper 004, Fig. 13).
 
     Examples
@@ -143,7 +144,7 @@ class TimeFrequencyProfile:
 
 
 def time_frequency_profile(
-    first_resonance: float, ts: float, move_time: float, distance: float, n=None, *, bounds=None
+    first_resonance: RadPerSecond, ts: float, move_time: float, distance: float, n=None, *, bounds=None
 ) -> TimeFrequencyProfile:
     """Rest-to-rest move over ``distance`` with acceleration K g_{phi,n}[k] (paper 004, eq. 15).
 

@@ -24,6 +24,7 @@ import numpy as np
 
 from shapefmu.runtime import window_filters
 from shapefmu.runtime.checks import check_count
+from shapefmu.runtime.units import RadPerSecond
 from shapefmu.runtime.window_filters import cosine_base, damped_mode
 from shapefmu.shapers.sampled import SampledShaper
 
@@ -51,7 +52,7 @@ def _sampled(design, order):
 # --- designs ---------------------------------------------------------------------------------
 
 
-def rectangle_filter(omega_n, zeta, ts, order=1, *, adjust_ts=False) -> SampledShaper:
+def rectangle_filter(omega_n: RadPerSecond, zeta, ts, order=1, *, adjust_ts=False) -> SampledShaper:
     """Rectangle-window shape filter: M equal samples, M = 2 pi / (omega_d Ts).
 
     Parameters
@@ -91,7 +92,7 @@ def rectangle_filter(omega_n, zeta, ts, order=1, *, adjust_ts=False) -> SampledS
     return _sampled(window_filters.rectangle_filter(omega_n, zeta, ts, adjust_ts=adjust_ts), order)
 
 
-def hanning_filter(omega_n, zeta, ts, order=1, *, adjust_ts=False) -> SampledShaper:
+def hanning_filter(omega_n: RadPerSecond, zeta, ts, order=1, *, adjust_ts=False) -> SampledShaper:
     """Hanning-window shape filter, M = 4 pi / (omega_d Ts) (paper 000, eq. 2, section 3).
 
     Parameters are those of :func:`rectangle_filter`.
@@ -113,7 +114,7 @@ def hanning_filter(omega_n, zeta, ts, order=1, *, adjust_ts=False) -> SampledSha
     return _sampled(window_filters.hanning_filter(omega_n, zeta, ts, adjust_ts=adjust_ts), order)
 
 
-def blackman_filter(omega_n, zeta, ts, order=1, *, adjust_ts=False) -> SampledShaper:
+def blackman_filter(omega_n: RadPerSecond, zeta, ts, order=1, *, adjust_ts=False) -> SampledShaper:
     """Blackman-window shape filter, M = 6 pi / (omega_d Ts) (paper 000, section 4).
 
     Parameters are those of :func:`rectangle_filter`.
@@ -136,7 +137,7 @@ def blackman_filter(omega_n, zeta, ts, order=1, *, adjust_ts=False) -> SampledSh
     return _sampled(window_filters.blackman_filter(omega_n, zeta, ts, adjust_ts=adjust_ts), order)
 
 
-def hamming_filter(omega_n, zeta, ts, order=1, *, adjust_ts=False) -> SampledShaper:
+def hamming_filter(omega_n: RadPerSecond, zeta, ts, order=1, *, adjust_ts=False) -> SampledShaper:
     """Hamming-window shape filter with an approximate null, M = 4 pi / (omega_d Ts) (section 5).
 
     Parameters are those of :func:`rectangle_filter`. The residual vibration at the design point is
@@ -160,7 +161,7 @@ def hamming_filter(omega_n, zeta, ts, order=1, *, adjust_ts=False) -> SampledSha
     return _sampled(window_filters.hamming_filter(omega_n, zeta, ts, adjust_ts=adjust_ts), order)
 
 
-def hamming_null_depth(omega_n, zeta, ts, *, adjust_ts=False) -> float:
+def hamming_null_depth(omega_n: RadPerSecond, zeta, ts, *, adjust_ts=False) -> float:
     """|H(omega_d Ts)| / H(0) of the Hamming base window: how far its approximate null is from 0.
 
     Equals 4 / (25 M + 4) (see :func:`hamming_filter`); for zeta = 0 this is also the percent
@@ -178,7 +179,7 @@ def hamming_null_depth(omega_n, zeta, ts, *, adjust_ts=False) -> float:
     return float(abs(np.sum(h * np.exp(-1j * omega_d * ts * k))) / h.sum())
 
 
-def three_hanning_filter(omega_n, zeta, ts, order=1, *, c=0.25, adjust_ts=False) -> SampledShaper:
+def three_hanning_filter(omega_n: RadPerSecond, zeta, ts, order=1, *, c=0.25, adjust_ts=False) -> SampledShaper:
     """Shape filter from the sum of three Hanning windows with weight C (paper 000, section 7, eq. 6).
 
     Parameters are those of :func:`rectangle_filter`, plus
@@ -208,7 +209,7 @@ def three_hanning_filter(omega_n, zeta, ts, order=1, *, c=0.25, adjust_ts=False)
 
 
 def differenced_filter(
-    omega_n, zeta, ts, order=1, *, k1=1.0, k2=-25.0, base="hanning", adjust_ts=False
+    omega_n: RadPerSecond, zeta, ts, order=1, *, k1=1.0, k2=-25.0, base="hanning", adjust_ts=False
 ) -> SampledShaper:
     """Non-symmetric shape filter h = k1 g + k2 dg from a base and its difference (section 8.1).
 
@@ -240,7 +241,7 @@ def differenced_filter(
 
 
 def convolved_filter(
-    omega_n, zeta, ts, order=1, *, k1=1.0, k2=1.0 / 125.0, k0=None, base="hanning", adjust_ts=False
+    omega_n: RadPerSecond, zeta, ts, order=1, *, k1=1.0, k2=1.0 / 125.0, k0=None, base="hanning", adjust_ts=False
 ) -> SampledShaper:
     """Non-symmetric shape filter h = k1 g[k - k0] + k2 (g * g)[k] (paper 000, section 8.2).
 
@@ -279,7 +280,7 @@ def convolved_filter(
 WINDOW_FILTERS = {kind: globals()[runtime.__name__] for kind, runtime in window_filters.WINDOW_FILTERS.items()}
 
 
-def get_window(kind, omega_n, zeta, ts, order=1, **options) -> SampledShaper:
+def get_window(kind, omega_n: RadPerSecond, zeta, ts, order=1, **options) -> SampledShaper:
     """The window shape filter ``kind`` for the mode (``omega_n`` rad/s, ``zeta``) sampled at ``ts`` s,
     as scipy.signal.get_window returns a window by name.
 

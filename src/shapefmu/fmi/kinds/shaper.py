@@ -56,6 +56,22 @@ INTERFACE = Interface(
 )
 
 
+def mode_start_values(modes_hz):
+    """The start values of a Shaper (or STOSController) for the modes ``modes_hz``, (f Hz, zeta)
+    pairs: ``n_modes``, ``f[i]`` and ``zeta[i]``.
+
+    >>> mode_start_values([(2000.0, 0.01), (3000.0, 0.01)])["f[2]"]
+    3000.0
+    """
+    if not 1 <= len(modes_hz) <= MAX_MODES:
+        raise ValueError(f"modes must hold 1 to {MAX_MODES} (f Hz, zeta) pairs, got {len(modes_hz)}")
+    values = {"n_modes": len(modes_hz)}
+    for i, (f, zeta) in enumerate(modes_hz, start=1):
+        values[f"f[{i}]"] = f
+        values[f"zeta[{i}]"] = zeta
+    return values
+
+
 class Model(_Model):
     interface = INTERFACE
     kernels = (FeedthroughFIR, StreamingShaper, SampleClock)

@@ -18,9 +18,9 @@ import sys
 from pathlib import Path
 
 from shapefmu.fmi.native.kernel_fmu import c_doubles, designed_twin, twin_variables_c, write_native_fmu
-from shapefmu.fmi.native.sampled import CLOSED_FORM
 from shapefmu.fmi.kinds.profile_generator import MAX_MODES
 from shapefmu.runtime import shaper_designs
+from shapefmu.runtime.shaper_designs import CLOSED_FORM
 
 NAME = "ProfileGenerator"
 SOURCES = ("motion_part.c", "motion_design.c", "exact_sum.c", "shaper_designs.c", "twin_variables.c")

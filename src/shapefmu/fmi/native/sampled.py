@@ -29,14 +29,13 @@ from pathlib import Path
 from shapefmu.fmi.kinds import designed
 from shapefmu.fmi.kinds.interface import Variable, parameter
 from shapefmu.fmi.native.kernel_fmu import number_by_type, table_fields, variable_rows, write_native_fmu
+from shapefmu.runtime.shaper_designs import CLOSED_FORM
 
 SOURCES = ("sampled_part.c", "sampled_fir.c", "shaper_designs.c")
 HEADERS = ("sampled_model.h", "sampled_fir.h", "sample_clock.h", "shaper_designs.h")
 NATIVE_NOTE = ("This FMU is the native C twin of the pythonfmu FMU of the same name: the same variables and "
                "sampled semantics, no Python needed. Its design was made at build time and is stored in its "
                "parameters (impulse_time[i] and impulse_amplitude[i], or tap[i]); sources/ holds its C code.")
-# Kinds the C part re-designs, with their impulses per mode (n = the derivative order of zv_dn).
-CLOSED_FORM = {"zv": lambda n: 2, "zvd": lambda n: 3, "zvdd": lambda n: 4, "zv_dn": lambda n: n + 2, "mzv": lambda n: 3}
 # Bounds on what one FMU declares (each entry is a ScalarVariable of its modelDescription.xml).
 MAX_IMPULSES = 4096
 MAX_TAPS = 100_000

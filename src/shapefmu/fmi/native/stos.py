@@ -19,7 +19,7 @@ import sys
 from pathlib import Path
 
 from shapefmu.fmi.native.kernel_fmu import c_doubles, designed_twin, twin_variables_c, write_native_fmu
-from shapefmu.fmi.native.sampled import CLOSED_FORM
+from shapefmu.runtime.shaper_designs import CLOSED_FORM
 
 NAME = "STOSController"
 SOURCES = ("stos_part.c", "stos_law.c", "exact_sum.c", "sample_clock.c", "shaper_designs.c", "twin_variables.c")
