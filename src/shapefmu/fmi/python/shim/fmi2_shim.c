@@ -444,32 +444,15 @@ EXPORT fmi2Status fmi2CancelStep(fmi2Component c)
     return unsupported(c, "fmi2CancelStep: doStep never runs asynchronously here");
 }
 
-EXPORT fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind kind, fmi2Status* value)
-{
-    (void)kind; (void)value;
-    return unsupported(c, "fmi2GetStatus: doStep never runs asynchronously here");
-}
-
-EXPORT fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind kind, fmi2Real* value)
-{
-    (void)kind; (void)value;
-    return unsupported(c, "fmi2GetRealStatus: doStep never runs asynchronously here");
-}
-
-EXPORT fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind kind, fmi2Integer* value)
-{
-    (void)kind; (void)value;
-    return unsupported(c, "fmi2GetIntegerStatus: doStep never runs asynchronously here");
-}
-
-EXPORT fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind kind, fmi2Boolean* value)
-{
-    (void)kind; (void)value;
-    return unsupported(c, "fmi2GetBooleanStatus: doStep never runs asynchronously here");
-}
-
-EXPORT fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind kind, fmi2String* value)
-{
-    (void)kind; (void)value;
-    return unsupported(c, "fmi2GetStringStatus: doStep never runs asynchronously here");
-}
+/* The status getters: doStep never runs asynchronously, so there is no status to give. */
+#define UNSUPPORTED_STATUS(function, type)                                                           \
+    EXPORT fmi2Status function(fmi2Component c, const fmi2StatusKind kind, type* value)            \
+    {                                                                                               \
+        (void)kind; (void)value;                                                                    \
+        return unsupported(c, #function ": doStep never runs asynchronously here");                 \
+    }
+UNSUPPORTED_STATUS(fmi2GetStatus, fmi2Status)
+UNSUPPORTED_STATUS(fmi2GetRealStatus, fmi2Real)
+UNSUPPORTED_STATUS(fmi2GetIntegerStatus, fmi2Integer)
+UNSUPPORTED_STATUS(fmi2GetBooleanStatus, fmi2Boolean)
+UNSUPPORTED_STATUS(fmi2GetStringStatus, fmi2String)
