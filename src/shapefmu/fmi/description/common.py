@@ -32,14 +32,15 @@ def quantity(variable, reference_of: dict) -> dict:
 
 
 def header(root: Element, md: ModelDescription) -> None:
-    """UnitDefinitions (each unit with its SI BaseUnit where known), LogCategories and
+    """UnitDefinitions (each unit with its SI BaseUnit where it is readable), LogCategories and
     DefaultExperiment, in the order both standards place them after the interfaces."""
     if md.units():
         definitions = SubElement(root, "UnitDefinitions")
         for name in md.units():
             unit = SubElement(definitions, "Unit", {"name": name})
-            if base_units(name):
-                SubElement(unit, "BaseUnit", base_units(name))
+            base = base_units(name)
+            if base is not None:  # {} is "1": dimensionless, every exponent 0
+                SubElement(unit, "BaseUnit", base)
     categories = SubElement(root, "LogCategories")
     for name, text in md.log_categories:
         SubElement(categories, "Category", {"name": name, **({"description": text} if text else {})})

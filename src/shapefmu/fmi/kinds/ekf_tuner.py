@@ -89,6 +89,10 @@ class Model(_Model):
         ts = self.values["Ts"]
         return 0.0, ts * math.ceil(200 * 2.0 * math.pi / self.values["omega0"] / ts), ts
 
+    def picture(self):
+        """The ring-down the EKF watches: four periods of the guessed frequency, decaying."""
+        return [("line", [(k / 32, math.exp(-k / 64) * math.cos(math.pi * k / 16)) for k in range(129)])]
+
     def step(self, t, h):
         values, tuner = self.values, self.tuner
 

@@ -69,7 +69,7 @@ def mode_parameters(count, frequency, unit, frequency_start, zeta_start=0.0, mod
     variables = []
     for i in range(1, count + 1):
         variables.append(parameter(f"{frequency}[{i}]", frequency_start(i), f"natural frequency of {mode} {i}", unit))
-        variables.append(parameter(f"zeta[{i}]", zeta_start, f"damping ratio of {mode} {i}, in [0, 1)"))
+        variables.append(parameter(f"zeta[{i}]", zeta_start, f"damping ratio of {mode} {i}, in [0, 1)", minimum=0.0))
     return tuple(variables)
 
 
@@ -101,6 +101,8 @@ class Interface:
         for v in self.variables:
             if v.type not in TYPES:
                 raise ValueError(f"{self.name}: variable {v.name} has type {v.type!r}, not one of {TYPES}")
+            if not v.description and v.causality != "independent":
+                raise ValueError(f"{self.name}: variable {v.name!r} needs a description")
 
     def variable(self, name):
         """The variable called ``name`` (KeyError if there is none)."""

@@ -50,3 +50,8 @@ class Model:
     def experiment(self):
         """The DefaultExperiment (start, stop, step) in s, after ``initialize``."""
         return 0.0, 1.0, 1e-3
+
+    def picture(self):
+        """What the FMU's icon shows of the design, after ``initialize``: strokes ``(kind, points)``
+        (``shapefmu.fmi.icon``); the base draws a step."""
+        return [("line", [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (3.0, 1.0)])]

@@ -74,11 +74,13 @@ INTERFACE = Interface(
     (
         parameter("profile", "BC:TZ", f"profile family: {', '.join(PROFILES)}"),
         parameter("distance", 1.7, "move distance", unit="m"),
-        parameter("speed", 0.7, "slew speed (twin-pulse); speed limit of the bang-bang, 0 for none", unit="m/s"),
+        parameter("speed", 0.7, "slew speed (twin-pulse); speed limit of the bang-bang, 0 for none", unit="m/s",
+                  minimum=0.0),
         parameter("acceleration_limit", 1.0, "acceleration limit of the bang-bang", unit="m/s2"),
         parameter("omega_n", 3.5, "notch frequency (twin-pulse) or first resonance (time-frequency)", unit="rad/s"),
         parameter("delta_omega", 0.2, "null mis-alignment of the M- twin-pulse kinds (if attenuation is 0)", unit="rad/s"),
-        parameter("attenuation", 0.05, "magnitude at omega_n the M- kinds are designed for; 0 uses delta_omega"),
+        parameter("attenuation", 0.05, "magnitude at omega_n the M- kinds are designed for; 0 uses delta_omega",
+                  minimum=0.0),
         parameter("null", 2, "null index k of the TP:BC twin pulse (eq. 3)", minimum=1),
         parameter("Ts", 1e-3, "sampling period of the profile's kernel (time-frequency: of the profile)", unit="s"),
         parameter("move_time", 2.5e-3, "time-frequency move time, a whole number of Ts", unit="s"),
@@ -136,6 +138,11 @@ class Model(_Model):
         start = max(self.values["t_start"], 0.0)
         stop = start + 1.2 * max(self.motion.breaks[-1], 1e-9)
         return 0.0, stop, stop / 1000.0
+
+    def picture(self):
+        """The position over the move."""
+        end = self.motion.breaks[-1]
+        return [("line", [(end * k / 64, self.motion.state(end * k / 64)[0]) for k in range(65)])]
 
     def input_changed(self, name):
         if self.running and self.started_at is None and self.values["start"] >= 0.5:

@@ -63,6 +63,12 @@ class Model(_Model):
         stop = 1.1 * end if end > 0.0 else 1.0
         return 0.0, stop, stop / 1000.0
 
+    def picture(self):
+        """The table over its span and a tenth more."""
+        start, stop, _ = self.experiment()
+        times = [start + (stop - start) * k / 96 for k in range(97)]
+        return [("line", [(t, self.table.value(t)) for t in times])]
+
     def step(self, t, h):
         self.values["y"] = self.table.value(t + h)
         self.values["y_mean"] = self.table.average(t, t + h)

@@ -119,13 +119,14 @@ INTERFACE = Interface(
     (
         parameter("kind", "hanning", f"filter design: {', '.join(KINDS)}"),
         parameter("f", 10.0, "natural frequency of the mode (time-frequency: its first resonance)", unit="Hz"),
-        parameter("zeta", 0.0, "damping ratio of the mode, in [0, 1); window filters only (others need 0)"),
+        parameter("zeta", 0.0, "damping ratio of the mode, in [0, 1); window filters only (others need 0)",
+                  minimum=0.0),
         parameter("order", 1, "robustness order n of a window filter: its n-fold self-convolution (eq. 1)", minimum=1),
         parameter("Ts", 1e-3, "sampling period of the filter: u is sampled at startTime + k*Ts", unit="s"),
         parameter("adjust_Ts", False, "window filters: use the nearest Ts that makes the window length whole"),
-        parameter("c", 0.25, "weight C of the side Hanning windows of three-hanning (section 7), >= 0"),
+        parameter("c", 0.25, "weight C of the side Hanning windows of three-hanning (section 7), >= 0", minimum=0.0),
         parameter("base", "hanning", f"base window of differenced and convolved: {', '.join(BASES)}"),
-        parameter("delta_f", 0.0, "null mis-alignment of the M- twin-pulse kinds, in [0, f)", unit="Hz"),
+        parameter("delta_f", 0.0, "null mis-alignment of the M- twin-pulse kinds, in [0, f)", unit="Hz", minimum=0.0),
         parameter("null", 2, "null index k of the TP:BC twin pulse (eq. 3)", minimum=1),
         parameter("move_time", 0.1, "time-frequency move time M*Ts, a whole number >= 2 of Ts", unit="s"),
         parameter("u0", 0.0, "command before the start time (the filter starts at rest on it)"),
@@ -164,6 +165,10 @@ class Model(_Model):
         """DefaultExperiment (start, stop, step): one sample per step, four filter lengths."""
         ts = self.values["Ts_used"]
         return 0.0, ts * max(10, 4 * len(self.taps)), ts
+
+    def picture(self):
+        """The filter's taps."""
+        return [("stems", list(enumerate(self.taps)))]
 
     def input_changed(self, name):
         if self.fir is not None:

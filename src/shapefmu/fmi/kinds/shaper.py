@@ -43,7 +43,7 @@ INTERFACE = Interface(
     (
         parameter("kind", "zvd", f"shaper design: {', '.join(KINDS)}"),
         parameter("n", 1, "derivative order of zv_dn (0 = ZV, 1 = ZVD, ...)", minimum=0),
-        parameter("vtol", 0.05, "tolerable residual vibration of ei, ei2, ei3, in (0, 0.25]"),
+        parameter("vtol", 0.05, "tolerable residual vibration of ei, ei2, ei3, in (0, 0.25]", maximum=0.25),
         parameter("n_modes", 1, f"number of modes used, 1..{MAX_MODES}", minimum=1, maximum=MAX_MODES),
         *mode_parameters(MAX_MODES, "f", "Hz", lambda i: 10.0 * i),
         parameter("Ts", 1e-3, "sampling period of the filter: u is sampled at startTime + k*Ts", unit="s"),
@@ -111,6 +111,10 @@ class Model(_Model):
         """DefaultExperiment (start, stop, step): one sample per step, four shaper lengths."""
         ts = self.values["Ts"]
         return 0.0, ts * max(10, math.ceil(4.0 * self.design[0][-1] / ts)), ts
+
+    def picture(self):
+        """The impulses the shaper is designed with."""
+        return [("stems", list(zip(*self.design)))]
 
     def input_changed(self, name):
         if self.fir is not None:

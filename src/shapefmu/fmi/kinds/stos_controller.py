@@ -42,7 +42,7 @@ INTERFACE = Interface(
     (
         parameter("b", 2.7e3, "rigid-body input gain: x_r'' = -damping x_r' + b u", unit="m/s2"),
         parameter("U", 11.0, "input limit |u| <= U"),
-        parameter("damping", 0.0, "rigid-body velocity damping (Kt^2/(R J) with back EMF)", unit="1/s"),
+        parameter("damping", 0.0, "rigid-body velocity damping (Kt^2/(R J) with back EMF)", unit="1/s", minimum=0.0),
         parameter("kind", "simultaneous", f"shaper the law is built from: {', '.join(shaper_designs.KINDS)}"),
         parameter("n", 1, "derivative order of zv_dn (0 = ZV, 1 = ZVD, ...)", minimum=0),
         parameter("n_modes", 2, f"number of modes, 1..{MAX_MODES}", minimum=1, maximum=MAX_MODES),
@@ -104,6 +104,20 @@ class Model(_Model):
         """DefaultExperiment: 2000 samples."""
         ts = self.values["Ts"]
         return 0.0, 2000 * ts, ts
+
+    def picture(self):
+        """The rigid body's bang-bang (accelerate, then brake, each twice the shaper long) shaped by the
+        law's impulses, which spare the modes: a staircase up, across and back."""
+        times, amplitudes = self.kernel.curves["times"], self.kernel.curves["amplitudes"]
+        half = 2.0 * times[-1]
+        edges = sorted({t + shift for t in times for shift in (0.0, half, 2.0 * half)})
+
+        def level(t):
+            return sum(a * ((t >= s) - 2 * (t >= s + half) + (t >= s + 2.0 * half)) for s, a in zip(times, amplitudes))
+
+        levels = [level(0.5 * (a + b)) for a, b in zip(edges, edges[1:])]
+        steps = [point for a, b, u in zip(edges, edges[1:], levels) for point in ((a, u), (b, u))]
+        return [("line", [(edges[0], 0.0), *steps, (edges[-1], 0.0)])]
 
     def input_changed(self, name):
         if self.kernel is not None and all(math.isfinite(self.values[n]) for n in ("target", "x_r", "x_r_dot")):

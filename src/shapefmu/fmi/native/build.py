@@ -38,10 +38,11 @@ def _from_model_file(path: Path, name: str | None) -> ModelPart:
     plant = as_plant(path)
     _check_states(plant.n_states, f"plant model {path}")
     data = tomllib.loads(read_text_file(path, "plant model"))  # as_plant read and checked it just now
-    units = {signal: fields.get("unit", "") for key in ("inputs", "outputs") for signal, fields in data[key].items()}
+    signals = {signal: fields for key in ("inputs", "outputs") for signal, fields in data[key].items()}
     descriptions = {key: raw.get("description", "") for key, raw in data["parameters"].items()}
-    return linear.model_part(plant, name=name, signal_units=units, descriptions=descriptions,
+    part = linear.model_part(plant, name=name, signals=signals, descriptions=descriptions,
                              description=data.get("description", ""))
+    return dataclasses.replace(part, source=data.get("source", ""))
 
 
 def to_model_part(model, name: str | None = None) -> ModelPart:
@@ -69,7 +70,7 @@ def _about(part: ModelPart) -> str:
     step = ("the exact zero-order-hold step of the linear system (its matrix exponential), so any "
             "communication step gives the sampled solution to rounding" if part.linear else
             f"fixed-substep RK4, the substep being the parameter {part.substep_parameter}")
-    return (f"{part.description or part.name}\n\n"
+    return (f"{part.description or part.name}{' (' + part.source + ')' if part.source else ''}\n\n"
             f"A plant model of shapefmu as a native C FMU: {len(part.states)} continuous states, inputs "
             f"{', '.join(s.name for s in part.inputs) or 'none'}, outputs {', '.join(s.name for s in part.outputs)}. "
             f"Model Exchange gives the host the state derivatives; Co-Simulation steps with {step}. "
@@ -112,7 +113,7 @@ def build_plant_fmu(model, out_path, *, name: str | None = None, fmi_version: st
             (root / "terminalsAndIcons").mkdir()
             (root / "terminalsAndIcons" / "terminalsAndIcons.xml").write_text(
                 fmi3.terminals_and_icons(interface.command_in, interface.command_out), encoding="utf-8")
-        add_documentation(root, _about(part))
+        add_documentation(root, _about(part), part.picture())
         zip_fmu(root, out_path)
     return out_path
 
@@ -128,7 +129,8 @@ def _description(part: ModelPart, guid: str, source_files: tuple[str, ...], date
         model_name=part.name, identifier=part.identifier, guid=guid, description=part.description,
         generation_tool=f"shapefmu {__version__} plant generator", variables=interface.variables,
         dependencies=part.dependencies_by_name(), log_categories=LOG_CATEGORIES, generation_date=date,
-        model_exchange=True, directional_derivatives=True, source_files=source_files, designed=False)
+        experiment=part.experiment(), model_exchange=True, directional_derivatives=True, source_files=source_files,
+        designed=False)
 
 
 def _guid(part: ModelPart, sources: dict[str, str]) -> str:

@@ -7,7 +7,8 @@ absolute sample grid (``c/sample_clock.c``), the closed-form designs (``c/shaper
 a generated ``model.c`` holding the variables and their start values. Nothing is designed at build
 time: every parameter is used at the exit of initialisation in closed form, so each may be set
 before it, as in the pythonfmu FMU. The start values are checked here by the kind's own
-initialisation (``shapefmu.fmi.kinds.ekf_tuner``, as the pythonfmu FMU's); the C also refuses a zv_dn order above 62 (64 impulses).
+initialisation (``shapefmu.fmi.kinds.ekf_tuner``, as the pythonfmu FMU's); the C also refuses a
+zv_dn order above 62 (64 impulses).
 """
 
 from __future__ import annotations

@@ -140,6 +140,6 @@ def write_native_fmu(name: str, out_path, model, variables, values: dict, depend
             (root / "terminalsAndIcons").mkdir()
             (root / "terminalsAndIcons" / "terminalsAndIcons.xml").write_text(
                 fmi3.terminals_and_icons(model.interface.command_in, model.interface.command_out), encoding="utf-8")
-        add_documentation(root, about)
+        add_documentation(root, about, model.picture())
         zip_fmu(root, out_path)
     return out_path

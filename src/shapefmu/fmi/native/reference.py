@@ -68,7 +68,7 @@ def build_native_reference(out_path, *, fmi_version: str = "2.0", clock: bool = 
     check_xml_string(values["table"], "table")  # NUL, other control characters, surrogates: before any C
     if [v.name for v in variables] != ["y", "y_mean", "table"]:
         raise RuntimeError(f"the ReferencePlayer's variables {[v.name for v in variables]} are not those "
-                           f"c/table_fmi2.c knows: y, y_mean, table")
+                           f"c/table_part.c knows: y, y_mean, table")
     about = f"{sys.modules[type(model).__module__].__doc__}\n\n{NATIVE_NOTE}"
     return write_native_fmu(NAME, out_path, model, variables, values, model.output_dependencies(), SOURCES, HEADERS,
                             lambda guid: _model_c(table, values["table"], guid), about, fmi_version=fmi_version,

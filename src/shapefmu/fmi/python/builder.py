@@ -156,6 +156,7 @@ def build_fmu(name: str, out_path, **start_values) -> Path:
     guid = "{" + str(uuid.uuid5(uuid.NAMESPACE_URL, "shapefmu:" + identity)) + "}"
     export_library, pythonfmu_version = _export_library()
     xml = fmi2.write(_description(model, guid, dependencies, pythonfmu_version))
+    documentation = _documentation(xml, name, model.picture())
     entry = f"{package}_{name}"
     build = {"guid": guid, "package": package, "start_values": baked, "dependencies": dependencies}
     out_path.parent.mkdir(parents=True, exist_ok=True)
@@ -173,7 +174,7 @@ def build_fmu(name: str, out_path, **start_values) -> Path:
             fmu.writestr(f"resources/{BUILD_FILE}", json.dumps(build, indent=2))
             for relative, content in files.items():
                 fmu.writestr(f"resources/{package}/{relative}", content)
-            for relative, content in _documentation(xml, name).items():
+            for relative, content in documentation.items():
                 fmu.writestr(relative, content)
         partial.replace(out_path)  # no half-written FMU is ever left under the final name
     return out_path
@@ -201,9 +202,10 @@ def _description(model, guid: str, dependencies: dict, pythonfmu_version: str) -
         experiment=model.experiment(), host_memory=False)
 
 
-def _documentation(xml: str, name: str) -> dict[str, bytes]:
-    """documentation/index.html, externalDependencies.txt and model.png of the pythonfmu FMU ``name``."""
-    from shapefmu.fmi.documentation import icon_png, index_html
+def _documentation(xml: str, name: str, picture) -> dict[str, bytes]:
+    """documentation/index.html, externalDependencies.txt and model.png (``picture``) of the pythonfmu FMU ``name``."""
+    from shapefmu.fmi.documentation import index_html
+    from shapefmu.fmi.icon import icon_png
 
     about = kind(name).__doc__
     libpython = _libpython() or f"libpython3.{sys.version_info.minor} (a shared library)"
@@ -213,7 +215,7 @@ def _documentation(xml: str, name: str) -> dict[str, bytes]:
                     f"the library path.\nIt needs no Python package: its code is inside, under resources/.\n")
     return {"documentation/index.html": index_html(xml.encode(), about, ["linux64"]).encode(),
             "documentation/externalDependencies.txt": dependencies.encode(),
-            "model.png": icon_png()}
+            "model.png": icon_png(picture)}
 
 
 def build_all(out_dir) -> list[Path]:
