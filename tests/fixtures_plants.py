@@ -1,6 +1,6 @@
 """Session-scoped fixtures for the plants FMUs (see conftest.py).
 
-Every plant of models/ (the five TOML plants and the nonlinear pendulum of models/pendulum.py) is
+Every plant of models/ (the seven TOML plants and the nonlinear pendulum of models/pendulum.py) is
 generated and compiled once per test session into a temporary directory.
 """
 
@@ -10,7 +10,8 @@ import pytest
 
 MODELS = Path(__file__).resolve().parent.parent / "models"
 # The linear plants of models/*.toml, by model name.
-LINEAR_PLANTS = ("disk_drive", "disk_drive_back_emf", "linear_synchronous_motor", "ten_pendula", "mass_spring_chain")
+LINEAR_PLANTS = ("disk_drive", "disk_drive_back_emf", "linear_synchronous_motor", "ten_pendula", "mass_spring_chain",
+                 "printer_bed", "gantry_crane")
 
 
 @pytest.fixture(scope="session")

@@ -269,6 +269,15 @@ def sprung_masses(masses: Sequence[float], stiffnesses: Sequence[float], dampers
     Marlin #26655: 1 kg at 30 Hz, 1.3 kg at 30 / sqrt(1.3) = 26.3 Hz). The state is
     [x, v, e_1, e_1', ...]; the outputs are the carriage position, each deflection e_i, then each
     mass's acceleration a + e_i'' = -(k_i e_i + c_i e_i') / m_i, what an accelerometer on it reads.
+
+    Examples
+    --------
+    >>> import math
+    >>> bed = sprung_masses([1.0], [35530.57584392168], [18.84955592153876])  # Marlin #26655's bed
+    >>> [(round(w / (2 * math.pi), 6), round(z, 6)) for w, z in bed.flexible_modes()]  # sqrt(k/m), c/(2 sqrt(km))
+    [(30.0, 0.05)]
+    >>> bed.outputs
+    ('carriage_position', 'deflection_1', 'acceleration_1')
     """
     masses = tuple(check_positive(m, f"masses[{i}]") for i, m in enumerate(masses))
     if not masses:

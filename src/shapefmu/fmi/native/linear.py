@@ -159,6 +159,33 @@ def _kind_mass_spring_chain(p: _Parameters):
     return A, B, C, ca.SX.zeros(n, 1)
 
 
+def _kind_sprung_masses(p: _Parameters):
+    """Masses sprung from a driven carriage (plants.library.sprung_masses): carriage acceleration a
+    in, m_i e_i'' + c_i e_i' + k_i e_i = -m_i a; outputs x, each e_i, each a + e_i''."""
+    masses = p.vector("masses", "positive")
+    n = len(masses)
+    stiffnesses = p.vector("stiffnesses", "positive")
+    dampers = p.vector("dampers", "nonnegative", default=0.0, size=n)
+    if len(stiffnesses) != n or len(dampers) != n:
+        raise _Mismatch("N sprung masses need N stiffnesses and dampers")
+    A = ca.SX.zeros(2 + 2 * n, 2 + 2 * n)
+    B = ca.SX.zeros(2 + 2 * n, 1)
+    C = ca.SX.zeros(1 + 2 * n, 2 + 2 * n)
+    A[0, 1] = 1.0
+    B[1, 0] = 1.0
+    C[0, 0] = 1.0
+    for i, (m, k, c) in enumerate(zip(masses, stiffnesses, dampers)):
+        e = 2 + 2 * i
+        A[e, e + 1] = 1.0
+        A[e + 1, e] = -k / m
+        A[e + 1, e + 1] = -c / m
+        B[e + 1, 0] = -1.0
+        C[1 + i, e] = 1.0
+        C[1 + n + i, e] = -k / m
+        C[1 + n + i, e + 1] = -c / m
+    return A, B, C, ca.SX.zeros(1 + 2 * n, 1)
+
+
 def _kind_transfer_function(p: _Parameters):
     """num(s)/den(s) in controllable canonical form, scaled by the frequency sigma = max_k |a_k|^(1/k).
 
@@ -199,6 +226,7 @@ _MAPPINGS = {
     "voice_coil_flexible": (_kind_voice_coil_flexible, True, True),
     "pendula": (_kind_pendula, True, True),
     "mass_spring_chain": (_kind_mass_spring_chain, True, True),
+    "sprung_masses": (_kind_sprung_masses, True, True),
     # The states of a realisation have no physical meaning to carry across a change of
     # coefficients: num and den are fixed.
     "transfer_function": (_kind_transfer_function, False, False),
@@ -335,6 +363,8 @@ _PAIRS = {
     "pendula": lambda k: ("cart position", "cart velocity") if k == 0 else
     (f"swing angle of pendulum {k}", f"swing rate of pendulum {k}"),
     "mass_spring_chain": lambda k: (f"position of mass {k + 1}", f"velocity of mass {k + 1}"),
+    "sprung_masses": lambda k: ("carriage position", "carriage velocity") if k == 0 else
+    (f"deflection of sprung mass {k} from the carriage", f"deflection rate of sprung mass {k}"),
 }
 _PAIRS["voice_coil_flexible"] = _PAIRS["rigid_flexible"]
 
