@@ -289,9 +289,29 @@ def sprung_masses(masses: Sequence[float], stiffnesses: Sequence[float], dampers
         raise ValueError(f"{n} sprung masses need {n} stiffnesses and dampers, got {len(stiffnesses)} and {len(dampers)}")
     if any(c < 0 for c in dampers):
         raise ValueError(f"dampers must be >= 0 N*s/m, got {dampers}")
-    A = np.zeros((2 + 2 * n, 2 + 2 * n))
-    B = np.zeros((2 + 2 * n, 1))
-    C = np.zeros((1 + 2 * n, 2 + 2 * n))
+    A, B, C, D = sprung_masses_matrices(masses, stiffnesses, dampers)
+    states = ["x", "v"] + [s for i in range(1, n + 1) for s in (f"e_{i}", f"de_{i}")]
+    outputs = (["carriage_position"] + [f"deflection_{i}" for i in range(1, n + 1)]
+               + [f"acceleration_{i}" for i in range(1, n + 1)])
+    parameters = {"masses": Parameter(masses, "kg"), "stiffnesses": Parameter(stiffnesses, "N/m"),
+                  "dampers": Parameter(dampers, "N*s/m")}
+    return Plant(A, B, C, D, inputs=("acceleration",), outputs=outputs, states=states,
+                 parameters=parameters, name=name, kind="sprung_masses")
+
+
+def sprung_masses_matrices(masses, stiffnesses, dampers, zeros=lambda rows, columns: np.zeros((rows, columns))):
+    """A, B, C, D of ``sprung_masses`` (state [x, v, e_1, e_1', ...]) from unchecked parameters of
+    any type that divides and negates: floats here, CasADi symbols in the plant-FMU generator
+    (``shapefmu.fmi.native.linear``), whose ``zeros(rows, columns)`` makes the matrices.
+
+    Examples
+    --------
+    >>> A, B, C, D = sprung_masses_matrices([2.0], [50.0], [4.0])
+    >>> A[3].tolist(), C[2].tolist()  # e'' = -(k/m) e - (c/m) e' - a; the accelerometer reads a + e''
+    ([0.0, 0.0, -25.0, -2.0], [0.0, 0.0, -25.0, -2.0])
+    """
+    n = len(masses)
+    A, B, C, D = zeros(2 + 2 * n, 2 + 2 * n), zeros(2 + 2 * n, 1), zeros(1 + 2 * n, 2 + 2 * n), zeros(1 + 2 * n, 1)
     A[0, 1] = 1.0
     B[1, 0] = 1.0
     C[0, 0] = 1.0
@@ -302,11 +322,6 @@ def sprung_masses(masses: Sequence[float], stiffnesses: Sequence[float], dampers
         A[e + 1, e + 1] = -c / m
         B[e + 1, 0] = -1.0
         C[1 + i, e] = 1.0
-        C[1 + n + i, e:e + 2] = (-k / m, -c / m)
-    states = ["x", "v"] + [s for i in range(1, n + 1) for s in (f"e_{i}", f"de_{i}")]
-    outputs = (["carriage_position"] + [f"deflection_{i}" for i in range(1, n + 1)]
-               + [f"acceleration_{i}" for i in range(1, n + 1)])
-    parameters = {"masses": Parameter(masses, "kg"), "stiffnesses": Parameter(stiffnesses, "N/m"),
-                  "dampers": Parameter(dampers, "N*s/m")}
-    return Plant(A, B, C, np.zeros((1 + 2 * n, 1)), inputs=("acceleration",), outputs=outputs, states=states,
-                 parameters=parameters, name=name, kind="sprung_masses")
+        C[1 + n + i, e] = -k / m
+        C[1 + n + i, e + 1] = -c / m
+    return A, B, C, D

@@ -22,7 +22,7 @@ import scipy.linalg
 
 from shapefmu.fmi.native.model_part import ModelPart, ScalarParameter, Signal, per_second
 from shapefmu.plants import Plant
-from shapefmu.plants.library import STANDARD_GRAVITY
+from shapefmu.plants.library import STANDARD_GRAVITY, sprung_masses_matrices
 from shapefmu.plants.loader import PARAMETER_SPECS
 
 # Library plants name the mode frequencies omega (rad/s) where model files write f (Hz or rad/s).
@@ -160,30 +160,15 @@ def _kind_mass_spring_chain(p: _Parameters):
 
 
 def _kind_sprung_masses(p: _Parameters):
-    """Masses sprung from a driven carriage (plants.library.sprung_masses): carriage acceleration a
-    in, m_i e_i'' + c_i e_i' + k_i e_i = -m_i a; outputs x, each e_i, each a + e_i''."""
+    """Masses sprung from a driven carriage: the library's own matrices (plants.library.sprung_masses)
+    of the symbols."""
     masses = p.vector("masses", "positive")
     n = len(masses)
     stiffnesses = p.vector("stiffnesses", "positive")
     dampers = p.vector("dampers", "nonnegative", default=0.0, size=n)
     if len(stiffnesses) != n or len(dampers) != n:
         raise _Mismatch("N sprung masses need N stiffnesses and dampers")
-    A = ca.SX.zeros(2 + 2 * n, 2 + 2 * n)
-    B = ca.SX.zeros(2 + 2 * n, 1)
-    C = ca.SX.zeros(1 + 2 * n, 2 + 2 * n)
-    A[0, 1] = 1.0
-    B[1, 0] = 1.0
-    C[0, 0] = 1.0
-    for i, (m, k, c) in enumerate(zip(masses, stiffnesses, dampers)):
-        e = 2 + 2 * i
-        A[e, e + 1] = 1.0
-        A[e + 1, e] = -k / m
-        A[e + 1, e + 1] = -c / m
-        B[e + 1, 0] = -1.0
-        C[1 + i, e] = 1.0
-        C[1 + n + i, e] = -k / m
-        C[1 + n + i, e + 1] = -c / m
-    return A, B, C, ca.SX.zeros(1 + 2 * n, 1)
+    return sprung_masses_matrices(masses, stiffnesses, dampers, ca.SX.zeros)
 
 
 def _kind_transfer_function(p: _Parameters):
