@@ -311,29 +311,17 @@ EXPORT fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefi
         INSTANTIATED);
 }
 
-EXPORT fmi2Status fmi2EnterInitializationMode(fmi2Component c)
-{
-    BEGIN(c, INSTANTIATED);
-    return advance(s, inner.EnterInitializationMode(s->component), INITIALIZATION);
-}
-
-EXPORT fmi2Status fmi2ExitInitializationMode(fmi2Component c)
-{
-    BEGIN(c, INITIALIZATION);
-    return advance(s, inner.ExitInitializationMode(s->component), STEP_COMPLETE);
-}
-
-EXPORT fmi2Status fmi2Terminate(fmi2Component c)
-{
-    BEGIN(c, STEP_COMPLETE);
-    return advance(s, inner.Terminate(s->component), TERMINATED);
-}
-
-EXPORT fmi2Status fmi2Reset(fmi2Component c)
-{
-    BEGIN(c, ANY_MODE);
-    return advance(s, inner.Reset(s->component), INSTANTIATED);
-}
+/* The transitions without arguments: called in mode `from`, in mode `to` once the model agrees. */
+#define TRANSITION(Name, from, to)                                                                 \
+    EXPORT fmi2Status fmi2##Name(fmi2Component c)                                                  \
+    {                                                                                              \
+        BEGIN(c, from);                                                                            \
+        return advance(s, inner.Name(s->component), to);                                           \
+    }
+TRANSITION(EnterInitializationMode, INSTANTIATED, INITIALIZATION)
+TRANSITION(ExitInitializationMode, INITIALIZATION, STEP_COMPLETE)
+TRANSITION(Terminate, STEP_COMPLETE, TERMINATED)
+TRANSITION(Reset, ANY_MODE, INSTANTIATED)
 
 /* The setters: before, in and after initialisation, not once terminated or after an error. */
 #define SETTABLE (INSTANTIATED | INITIALIZATION | STEP_COMPLETE)
