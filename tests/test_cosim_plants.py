@@ -10,7 +10,7 @@ import time
 import numpy as np
 import pytest
 import scipy.linalg
-from cosim_hosts import run_ecos, run_libcosim
+from support.ssp_hosts import run_ecos, run_libcosim
 
 from shapefmu.cosim import Master, simulate
 from shapefmu.fmi.ssp import System

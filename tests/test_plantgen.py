@@ -14,7 +14,7 @@ import shutil
 import numpy as np
 import pytest
 import scipy.linalg
-from fixtures_plants import LINEAR_PLANTS, MODELS
+from support.fixtures_plants import LINEAR_PLANTS, MODELS
 from fmpy import extract, read_model_description, simulate_fmu
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Model, FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, fmi2Error

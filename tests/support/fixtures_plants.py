@@ -1,14 +1,12 @@
-"""Session-scoped fixtures for the plants FMUs (see conftest.py).
+"""Session-scoped fixtures for the plant FMUs (see conftest.py).
 
 Every plant of models/ (the seven TOML plants and the nonlinear pendulum of models/pendulum.py) is
 generated and compiled once per test session into a temporary directory.
 """
 
-from pathlib import Path
-
 import pytest
 
-MODELS = Path(__file__).resolve().parent.parent / "models"
+from support import MODELS
 # The linear plants of models/*.toml, by model name.
 LINEAR_PLANTS = ("disk_drive", "disk_drive_back_emf", "linear_synchronous_motor", "ten_pendula", "mass_spring_chain",
                  "printer_bed", "gantry_crane")

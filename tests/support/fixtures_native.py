@@ -1,12 +1,11 @@
-"""Session-scoped fixtures for the native C Shaper and ShapeFilter FMUs (shapefmu.fmi.native.sampled).
+"""Session-scoped fixtures for the native C Shaper and ShapeFilter FMUs (shapefmu.fmi.native.twins).
 
 Every Shaper kind is built once: a closed-form kind for two modes (single-mode runs re-design it in
 C through n_modes = 1), every other kind for one and for two modes, since its design is made only
-at build time. The builds run two at a time (each is two C compilations: linux64 and win64).
+at build time. The builds run two at a time (``builds``).
 """
 
 import math
-from concurrent.futures import ThreadPoolExecutor
 
 import pytest
 
@@ -39,28 +38,18 @@ def shaper_starts(kind, modes):
 
 
 @pytest.fixture(scope="session")
-def native_shapers(tmp_path_factory):
+def native_shapers(builds):
     """{(kind, n_modes built for): (FMU path, start values)} of native Shaper FMUs."""
-    from shapefmu.fmi.native.sampled import build_native_fmu
-
-    folder = tmp_path_factory.mktemp("native_shapers")
     jobs = {(kind, 2): shaper_starts(kind, TWO_MODES) for kind in CLOSED_FORM}
     for kind in BUILD_TIME_ONLY:
         jobs[(kind, 1)] = shaper_starts(kind, ONE_MODE)
         jobs[(kind, 2)] = shaper_starts(kind, TWO_MODES)
-    with ThreadPoolExecutor(2) as pool:
-        paths = {key: pool.submit(build_native_fmu, "Shaper", folder / f"{key[0]}_{key[1]}.fmu", **starts)
-                 for key, starts in jobs.items()}
-        return {key: (future.result(), jobs[key]) for key, future in paths.items()}
+    paths = builds.many({key: ("native", ("Shaper",), starts) for key, starts in jobs.items()})
+    return {key: (paths[key], jobs[key]) for key in jobs}
 
 
 @pytest.fixture(scope="session")
-def native_filters(tmp_path_factory):
+def native_filters(builds):
     """{name: (FMU path, start values)} of native ShapeFilter FMUs (FILTERS)."""
-    from shapefmu.fmi.native.sampled import build_native_fmu
-
-    folder = tmp_path_factory.mktemp("native_filters")
-    with ThreadPoolExecutor(2) as pool:
-        paths = {name: pool.submit(build_native_fmu, "ShapeFilter", folder / f"{name.replace(':', '_')}.fmu", **starts)
-                 for name, starts in FILTERS.items()}
-        return {name: (future.result(), FILTERS[name]) for name, future in paths.items()}
+    paths = builds.many({name: ("native", ("ShapeFilter",), starts) for name, starts in FILTERS.items()})
+    return {name: (paths[name], FILTERS[name]) for name in FILTERS}

@@ -1,6 +1,6 @@
-"""A standard-library-only FMI 2.0 co-simulation driver (ctypes), run as ``python -I -S`` script.
+"""A standard-library-only FMI 2.0 co-simulation host (ctypes), run as a ``python -I -S`` script.
 
-Usage: python -I -S fmi2_ctypes_driver.py FMU_DIR[,FMU_DIR...] STEPS H
+Usage: python -I -S fmi2_ctypes_host.py FMU_DIR[,FMU_DIR...] STEPS H
 FMU_DIR is an extracted FMU. For each step k the command is sin(0.05 k) + (1 if 20 <= k < 60); the
 FMUs are stepped interleaved in one process, and one JSON line per FMU gives its outputs y. The
 script first proves the isolation: numpy, shapefmu, fmpy and pythonfmu must not be importable.

@@ -1,10 +1,22 @@
-"""Session-scoped fixtures for the fmi FMUs (see conftest.py)."""
+"""Session-scoped fixtures for the pythonfmu FMUs (see conftest.py), each built once by ``builds``,
+and the start values the tests share."""
 
-# --- Shaper FMU (fmi/kinds/shaper.py) -------------------------------------------------------------
-
+import functools
 import math
 
 import pytest
+
+
+def pythonfmu_fixture(model: str, start_values: dict):
+    """A session fixture: the path of the pythonfmu FMU ``model`` built with ``start_values``."""
+    @pytest.fixture(scope="session")
+    def fixture(builds):
+        return builds.pythonfmu(model, **start_values)
+
+    return fixture
+
+
+# --- Shaper FMU (fmi/kinds/shaper.py) -------------------------------------------------------------
 
 # A ZV shaper for 10 Hz sampled at 1 ms: its impulses (0 and 50 ms) lie on the grid, so the FMU's
 # sampled output equals the continuous-time shaping of a held command exactly.
@@ -14,20 +26,10 @@ MULTIMODE_STARTS = {"kind": "simultaneous", "n_modes": 2, "f[1]": 20.0, "zeta[1]
                     "zeta[2]": 0.01, "Ts": 1e-3}
 
 
-@pytest.fixture(scope="session")
-def shaper_fmu(tmp_path_factory):
-    """Path of a ZV Shaper FMU (SHAPER_STARTS), built once per test session."""
-    from shapefmu.fmi import build_fmu
-
-    return build_fmu("Shaper", tmp_path_factory.mktemp("fmu_shaper") / "Shaper.fmu", **SHAPER_STARTS)
+shaper_fmu = pythonfmu_fixture("Shaper", SHAPER_STARTS)  # a ZV Shaper
 
 
-@pytest.fixture(scope="session")
-def multimode_shaper_fmu(tmp_path_factory):
-    """Path of a simultaneous two-mode Shaper FMU (MULTIMODE_STARTS)."""
-    from shapefmu.fmi import build_fmu
-
-    return build_fmu("Shaper", tmp_path_factory.mktemp("fmu_multimode") / "Shaper2.fmu", **MULTIMODE_STARTS)
+multimode_shaper_fmu = pythonfmu_fixture("Shaper", MULTIMODE_STARTS)  # a simultaneous two-mode Shaper
 
 
 @pytest.fixture(scope="session")
@@ -55,31 +57,16 @@ STOS_STARTS = {"b": 2.7e3, "U": 11.0, "kind": "simultaneous", "n_modes": 2, "f[1
                "f[2]": 3000.0, "zeta[2]": 0.01, "Ts": 1e-5}
 
 
-@pytest.fixture(scope="session")
-def profile_fmu(tmp_path_factory):
-    """Path of a ProfileGenerator FMU playing PROFILE_STARTS."""
-    from shapefmu.fmi import build_fmu
-
-    return build_fmu("ProfileGenerator", tmp_path_factory.mktemp("fmu_profile") / "Profile.fmu", **PROFILE_STARTS)
+profile_fmu = pythonfmu_fixture("ProfileGenerator", PROFILE_STARTS)  # paper 003's ten-pendula move
 
 
-@pytest.fixture(scope="session")
-def ekf_fmu(tmp_path_factory):
-    """Path of an EKFTuner FMU with EKF_STARTS."""
-    from shapefmu.fmi import build_fmu
-
-    return build_fmu("EKFTuner", tmp_path_factory.mktemp("fmu_ekf") / "EKFTuner.fmu", **EKF_STARTS)
+ekf_fmu = pythonfmu_fixture("EKFTuner", EKF_STARTS)  # paper 001's EKF tuner
 
 
-@pytest.fixture(scope="session")
-def stos_fmu(tmp_path_factory):
-    """Path of an STOSController FMU for the disk drive (STOS_STARTS)."""
-    from shapefmu.fmi import build_fmu
-
-    return build_fmu("STOSController", tmp_path_factory.mktemp("fmu_stos") / "STOS.fmu", **STOS_STARTS)
+stos_fmu = pythonfmu_fixture("STOSController", STOS_STARTS)  # the disk drive's STOS controller
 
 
-@pytest.fixture(scope="session")
+@functools.cache
 def time_optimal_solution():
     """The time-optimal move of a rigid body with paper 002's 2 kHz mode (five bangs), X = 1 mm."""
     from shapefmu.optimal import time_optimal
@@ -87,6 +74,11 @@ def time_optimal_solution():
 
     b2 = 2.7e3
     return time_optimal(rigid_flexible(b2, [(2 * math.pi * 2.0e3, 0.0, -b2)]), 1e-3, 11.0)
+
+
+@pytest.fixture(name="time_optimal_solution", scope="session")
+def time_optimal_solution_fixture():
+    return time_optimal_solution()
 
 
 @pytest.fixture(scope="session")
@@ -115,19 +107,7 @@ SHAPE_FILTER_STARTS = {"kind": "hanning", "f": SHAPE_FILTER_F, "zeta": SHAPE_FIL
 FEEDTHROUGH_FILTER_STARTS = {"kind": "rectangle", "f": SHAPE_FILTER_F, "zeta": SHAPE_FILTER_ZETA, "Ts": 1e-3}
 
 
-@pytest.fixture(scope="session")
-def shape_filter_fmu(tmp_path_factory):
-    """Path of a ShapeFilter FMU (second-order damped Hanning, SHAPE_FILTER_STARTS)."""
-    from shapefmu.fmi import build_fmu
-
-    return build_fmu("ShapeFilter", tmp_path_factory.mktemp("fmu_shape_filter") / "ShapeFilter.fmu",
-                     **SHAPE_FILTER_STARTS)
+shape_filter_fmu = pythonfmu_fixture("ShapeFilter", SHAPE_FILTER_STARTS)  # a second-order damped Hanning filter
 
 
-@pytest.fixture(scope="session")
-def feedthrough_filter_fmu(tmp_path_factory):
-    """Path of a ShapeFilter FMU whose y feeds through from u (rectangle, FEEDTHROUGH_FILTER_STARTS)."""
-    from shapefmu.fmi import build_fmu
-
-    return build_fmu("ShapeFilter", tmp_path_factory.mktemp("fmu_feedthrough_filter") / "ShapeFilter.fmu",
-                     **FEEDTHROUGH_FILTER_STARTS)
+feedthrough_filter_fmu = pythonfmu_fixture("ShapeFilter", FEEDTHROUGH_FILTER_STARTS)  # y feeds through from u

@@ -1,8 +1,9 @@
 /* A minimal FMI 2.0 Co-Simulation host in C, compiled for Linux (dlopen) and cross-compiled for
- * Windows (LoadLibrary, run under Wine) by tests/test_native_win64.py, so that one FMU's linux64 and
- * win64 binaries run the same simulation and their outputs can be compared.
+ * Windows (LoadLibrary, run under Wine) and ARM Linux (run under qemu) by tests/support/cross_platform.py,
+ * so that one FMU's linux64, win64 and aarch64-linux binaries run the same simulation and their outputs
+ * can be compared.
  *
- * Usage: fmu_host PLAN. The plan is a text file of lines, one FMU after another:
+ * Usage: plan_host PLAN. The plan is a text file of lines, one FMU after another:
  *   fmu LIBRARY GUID          load the shared library, instantiate a Co-Simulation instance
  *   real VR VALUE             a Real start value (set in Initialization Mode); integer, string alike
  *   input VR SCALE            the input driven with SCALE * u_k (none without this line)

@@ -4,7 +4,7 @@
 Co-Simulation, a variable of every FMI 2.0 type, a termination request at ``stop_at``) with the
 modelDescription.xml written from the table below; ``build_typed_stair3`` the same model as an FMI 3.0
 FMU (typed_stair3.c: Float64, every integer type, Enumeration, Boolean and String). The FMI headers
-are the ones the plant FMUs ship.
+are fmpy's copy, as another tool compiles with its own.
 
 Variants behave as other exporters' FMUs do (typed_stair_model.h says how, from the standards' text):
 ``quirks=("PROVISIONAL",)`` keeps a step called with noSetFMUStatePriorToCurrentPoint = false
@@ -22,12 +22,13 @@ from __future__ import annotations
 import subprocess
 import tempfile
 import zipfile
-from importlib import resources
 from pathlib import Path
 
 import fmpy
 
-HERE = Path(__file__).resolve().parent / "fmus_c"
+from support import FMI_HEADERS
+
+HERE = Path(__file__).resolve().parent.parent / "fmus_c"
 GUID = "{6f1c2b7e-typed-stair-0001}"
 TOKEN3 = "{6f1c2b7e-typed-stair-0003}"
 TOKEN_ARRAYS = "{6f1c2b7e-array-gain-0003}"
@@ -217,19 +218,17 @@ def _missing_library(directory: Path, name: str) -> tuple[str, ...]:
 def build_typed_stair(directory: Path, identifier: str = "TypedStair", *, quirks: tuple[str, ...] = (),
                       source: bool = False, dependencies: bool = True, missing_library: str | None = None) -> Path:
     """The TypedStair FMU (see tests/fmus_c/typed_stair.c), or a variant of it (module docstring), in ``directory``."""
-    include = Path(str(resources.files("shapefmu.fmi.native") / "c"))
     libraries = _missing_library(Path(directory), missing_library) if missing_library else ()
     return compile_fmu(HERE / "typed_stair.c", typed_stair_description(identifier, source=source, dependencies=dependencies),
-                       identifier, Path(directory) / f"{identifier}.fmu", include, fmpy.platform,
+                       identifier, Path(directory) / f"{identifier}.fmu", FMI_HEADERS, fmpy.platform,
                        tuple(f"QUIRK_{q}" for q in quirks), libraries)
 
 
 def build_typed_stair3(directory: Path, identifier: str = "TypedStair3", *, quirks: tuple[str, ...] = (),
                        source: bool = False, dependencies: bool = True) -> Path:
     """The TypedStair3 FMU (FMI 3.0, see tests/fmus_c/typed_stair3.c), or a variant of it, in ``directory``."""
-    include = Path(str(resources.files("shapefmu.fmi.native") / "c"))
     return compile_fmu(HERE / "typed_stair3.c", typed_stair3_description(identifier, source=source, dependencies=dependencies),
-                       identifier, Path(directory) / f"{identifier}.fmu", include, fmpy.platform_tuple,
+                       identifier, Path(directory) / f"{identifier}.fmu", FMI_HEADERS, fmpy.platform_tuple,
                        tuple(f"QUIRK_{q}" for q in quirks), headers=("typed_stair_model.h", "fmi3_common.h"))
 
 
@@ -263,6 +262,5 @@ ARRAY_GAIN3_DESCRIPTION = f"""<?xml version="1.0" encoding="UTF-8"?>
 
 def build_array_gain3(directory: Path) -> Path:
     """The ArrayGain3 FMU (FMI 3.0 Co-Simulation with array variables, tests/fmus_c/array_gain3.c) in ``directory``."""
-    include = Path(str(resources.files("shapefmu.fmi.native") / "c"))
     return compile_fmu(HERE / "array_gain3.c", ARRAY_GAIN3_DESCRIPTION, "ArrayGain3", Path(directory) / "ArrayGain3.fmu",
-                       include, fmpy.platform_tuple, headers=("fmi3_common.h",))
+                       FMI_HEADERS, fmpy.platform_tuple, headers=("fmi3_common.h",))
