@@ -110,6 +110,21 @@ def test_each_kind_and_plant_has_an_icon_of_its_own(built):
         assert _icon(built[f"native3 {name}"]) == icons[f"pythonfmu {name}"]
 
 
+def test_an_undamped_mode_on_the_icon_grid_draws_its_peak_there(tmp_path):
+    """The single undamped mode of paper 000's example (1 rad/s, zeta = 0): the icon's grid, a quarter
+    to four times the mode, has the mode at its middle point, where j omega I - A is singular; the
+    picture's highest point is that mode."""
+    from shapefmu.fmi.native.linear import model_part
+    from shapefmu.plants import rigid_flexible
+
+    omega = 1.0
+    plant = rigid_flexible(1.0, [(omega, 0.0, omega**2)], name="single_mode")
+    (kind, points), = model_part(plant).picture()
+    peak = max(points, key=lambda point: point[1])
+    assert kind == "line" and peak[0] == pytest.approx(math.log10(omega), abs=1e-12)
+    assert build_plant_fmu(plant, tmp_path / "SingleMode.fmu").is_file()
+
+
 def test_the_page_names_the_papers_and_the_meaning_of_the_signals(built):
     page = zipfile.ZipFile(built["native3 STOSController"]).read("documentation/index.html").decode()
     assert "La-orpacharapan, L. Y. Pao, Nonlinear control for maneuvering multiple flexible mode systems" in page

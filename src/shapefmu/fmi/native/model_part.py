@@ -23,6 +23,8 @@ from shapefmu.runtime.checks import check_text
 CONSTRAINTS = ("any", "positive", "nonnegative", "nonzero", "damping_ratio")
 # The inclusive lower bound (FMI min) a constraint gives; a strict one (> 0) has none.
 _LOWER_BOUNDS = {"nonnegative": 0.0, "damping_ratio": 0.0}
+# The damping ratio the icon's magnitude responses are drawn with at least (ModelPart.picture).
+PICTURE_DAMPING = 1e-3
 
 # A structured FMI 2.0 name without quoted parts (fmi2 standard, section 2.2.9): identifiers
 # separated by dots, each with optional array indices.
@@ -173,12 +175,15 @@ class ModelPart:
 
     def picture(self):
         """The icon's picture (``shapefmu.fmi.icon``): the plant's modes, as the resonance peaks of the
-        sum of its outputs' magnitude responses (each scaled to its peak), log-log, around the modes."""
+        sum of its outputs' magnitude responses (each scaled to its peak), log-log, around the modes.
+        The responses are taken at s = (PICTURE_DAMPING + j) w, just right of the imaginary axis, so an
+        undamped mode's pole on the grid draws a tall peak instead of a singular matrix."""
         A, B, C, D = self.linearisation()
         omegas = self._frequencies() or [1.0]
         grid = np.logspace(math.log10(omegas[0] / 4.0), math.log10(omegas[-1] * 4.0), 97)
         n = A.shape[0]
-        G = np.array([np.abs(C @ np.linalg.solve(1j * w * np.eye(n) - A, B[:, :1]) + D[:, :1])[:, 0] for w in grid])
+        G = np.array([np.abs(C @ np.linalg.solve((PICTURE_DAMPING + 1j) * w * np.eye(n) - A, B[:, :1]) + D[:, :1])[:, 0]
+                      for w in grid])
         logs = np.log10(np.maximum((G / np.maximum(G.max(axis=0), 1e-300)).sum(axis=1), 1e-12))
         return [("line", [(math.log10(w), g - logs.min()) for w, g in zip(grid, logs)])]
 
