@@ -11,6 +11,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402  (the backend must be chosen first)
 import numpy as np  # noqa: E402
 
+from shapefmu import files  # noqa: E402
+
 from shapefmu.analysis import SensitivityCurve  # noqa: E402
 
 
@@ -45,13 +47,12 @@ def plot_shaped_command(t, u, shaped: dict[str, np.ndarray], path, ylabel: str =
 
 
 def save_figure(fig, path) -> Path:
-    """Write ``fig`` to ``path`` (its folder created), close it, and return the path."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
+    """Write ``fig`` to ``path`` (``shapefmu.files``: checked, whole), close it, and return the path."""
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    try:
+        return files.save_figure(fig, path, dpi=120)
+    finally:
+        plt.close(fig)
 
 
 def plot_motion_profile(profile, path, title: str = "") -> Path:

@@ -12,7 +12,7 @@ import math
 import sys
 from pathlib import Path
 
-from shapefmu.cli.arguments import examples, output_file, parse_mode
+from shapefmu.cli.arguments import examples, output_file, parse_mode, say_written
 from shapefmu.cli.progress import showing
 
 AXIS_CHOICES = ("x", "y", "z", "xyz")
@@ -78,7 +78,7 @@ def _cmd_identify(args) -> int:
     if args.plot:
         from shapefmu.plots import plot_identified
 
-        print(f"spectrum plot written to {plot_identified(found, args.plot)}")
+        say_written(args, f"spectrum plot written to {plot_identified(found, args.plot)}")
     return 0
 
 
@@ -102,6 +102,10 @@ def _cmd_recommend(args) -> int:
         raise ValueError("give recordings or --mode HZ[:ZETA] (one or more), not both and not neither")
     if args.build and args.firmware != "fmu":
         raise ValueError(f"--build writes an FMU, the fmu target: give --firmware fmu, not {args.firmware}")
+    if args.build:  # the .ssv written beside the FMU, checked before the work as --build itself is
+        from shapefmu.files import check_output
+
+        check_output(Path(args.build).with_suffix(".ssv"), "parameter set", named=False)
     # with --json, stdout holds the JSON alone: every other line goes to stderr
     say = (lambda text: print(text, file=sys.stderr)) if args.json else print
     max_freq = klipper.metrics.MAX_FREQ
@@ -195,7 +199,7 @@ def _print_table(advice, recordings: int) -> None:
 
 def _build(pick, out: Path, *, python: bool, fmi_version: str = "2.0") -> list[Path]:
     """The pick as a Shaper or ShapeFilter FMU (native unless ``python``; native as FMI
-    ``fmi_version``) and its .ssv parameter set."""
+    ``fmi_version``) and its .ssv parameter set, a file beside it the user did not name (never one that exists)."""
     from shapefmu.fmi.ssp import write_ssv
 
     if pick.fmu is None:
@@ -218,7 +222,7 @@ def _build(pick, out: Path, *, python: bool, fmi_version: str = "2.0") -> list[P
         from shapefmu.fmi.native.sampled import build_native_fmu
 
         fmu = build_native_fmu(model, out, fmi_version=fmi_version, **starts)
-    ssv = write_ssv(out.with_suffix(".ssv"), starts)
+    ssv = write_ssv(out.with_suffix(".ssv"), starts, named=False)
     return [fmu, ssv]
 
 

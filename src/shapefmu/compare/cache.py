@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from shapefmu.compare.plant import measured_plant
+from shapefmu.files import write_text
 
 
 class FMUCache:
@@ -43,7 +44,7 @@ class FMUCache:
             path.parent.mkdir(exist_ok=True)
             build(path)
             self._stamps[file_name] = fingerprint
-            self._stamps_path.write_text(json.dumps(self._stamps, indent=1, sort_keys=True))
+            write_text(self._stamps_path, json.dumps(self._stamps, indent=1, sort_keys=True), "FMU cache stamps")
         return path
 
     def slave(self, name: str, **start_values) -> Path:

@@ -44,7 +44,7 @@ from shapefmu.compare.metrics import MoveMetrics, move_metrics
 from shapefmu.compare.plot import plot_compare
 from shapefmu.compare.systems import (SHAPER_KINDS, baked_in, ekf_tuned_moves, ekf_tuned_system, mode_arrays, modes_hz,
                                       signal_table, stos_system)
-from shapefmu.runtime.checks import check_finite, check_positive
+from shapefmu.runtime.checks import check_finite, check_positive, check_size
 
 CANDIDATES = ("bang-bang", "convolution", "simultaneous", "stos-convolution", "stos-simultaneous", "ekf-tuned",
               "time-optimal")
@@ -141,6 +141,9 @@ def compare(plant_model, distance: float, candidates=CANDIDATES, step: float = 1
     u_max = check_positive(u_max, "u_max")
     modes = modes_hz(plant)
     window = 2.0 * math.pi / min(omega for omega, _ in plant.flexible_modes())
+    # the master's bound on the run's steps, before the designs (the run lasts at least two periods)
+    check_size((2.0 * window if stop_time is None else check_positive(stop_time, "stop_time")) / step, "MAX_MACRO_STEPS",
+               f"a run by steps of {step!r} s takes at least", "macro steps", "take a longer step")
     say = progress or (lambda text: None)
     fmus = FMUCache(cache, native=native, fmi_version=fmi_version)
     say(f"building or reusing the plant FMU in {cache}")
@@ -191,8 +194,9 @@ def compare(plant_model, distance: float, candidates=CANDIDATES, step: float = 1
             path = Path(write_ssp)
             if target == "omsimulator":
                 sys_ = baked_in(sys_, fmus, strings_only=True)
+            # one system per candidate beside the name given: files the user did not name, never replaced
             written.append(write_system(sys_.for_experiment(start + stop_time), path.with_stem(f"{path.stem}_{name.replace('-', '_')}"),
-                                        target, step if target else None))
+                                        target, step if target else None, named=False))
         if start > 0.0:
             # The plant is linear: remove what is left of the identification move's ring-down
             # (that move alone through the same tuner, which passes it unshaped and one step late

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from shapefmu.files import save_figure
+
 
 def plot_compare(comparison, path) -> Path:
     """u(t), the position error and the deflections of every candidate of ``comparison`` (a
@@ -28,8 +30,7 @@ def plot_compare(comparison, path) -> Path:
     axes[0].legend(fontsize="small", ncol=3)
     axes[0].set_title(f"{comparison.plant}: move of {comparison.distance:g}, FMUs at {comparison.step:g} s")
     figure.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    figure.savefig(path)
-    plt.close(figure)
-    return path
+    try:
+        return save_figure(figure, path)
+    finally:
+        plt.close(figure)

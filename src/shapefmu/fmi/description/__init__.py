@@ -4,7 +4,7 @@ version (``fmi2``, ``fmi3``), as FMPy reads and writes them; the units with thei
 
 from shapefmu.fmi.description import fmi2, fmi3
 from shapefmu.fmi.description.model import ModelDescription, now
-from shapefmu.fmi.description.xml_text import check_xml_string
+from shapefmu.fmi.description.xml_text import XML_MAX_TEXT_LENGTH, check_xml_string
 
 WRITERS = {"2.0": fmi2.write, "3.0": fmi3.write}
 
@@ -16,4 +16,4 @@ def write(md: ModelDescription, fmi_version: str) -> str:
     return WRITERS[fmi_version](md)
 
 
-__all__ = ["ModelDescription", "check_xml_string", "now", "write"]
+__all__ = ["XML_MAX_TEXT_LENGTH", "ModelDescription", "check_xml_string", "now", "write"]

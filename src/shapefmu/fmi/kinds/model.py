@@ -37,7 +37,10 @@ class Model:
         and design the kernels, at ``self.time``: the exit of initialisation."""
 
     def step(self, t, h):
-        """Advance the kernels over (t, t + h] and set the outputs."""
+        """Advance the kernels over (t, t + h] and set the outputs. Any h > 0 is honoured (hosts trim
+        their last step to 1e-16 s): a sampled model takes its samples on the grid t0 + k Ts with
+        ``runtime.sample_clock.SampleClock`` (made in ``initialize``, listed in ``kernels`` and
+        ``state_attributes``), which counts them from the steps, never from the host's t."""
         raise NotImplementedError
 
     def input_changed(self, name):

@@ -23,8 +23,8 @@ from shapefmu.runtime import shaper_designs
 from shapefmu.runtime.shaper_designs import CLOSED_FORM
 
 NAME = "ProfileGenerator"
-SOURCES = ("motion_part.c", "motion_design.c", "exact_sum.c", "shaper_designs.c", "twin_variables.c")
-HEADERS = ("motion_model.h", "motion_design.h", "exact_sum.h", "shaper_designs.h", "twin_variables.h")
+SOURCES = ("motion_part.c", "motion_design.c", "exact_sum.c", "sample_clock.c", "shaper_designs.c", "twin_variables.c")
+HEADERS = ("motion_model.h", "motion_design.h", "exact_sum.h", "sample_clock.h", "shaper_designs.h", "twin_variables.h")
 MAX_LEVELS = 1_000_000
 _MEANINGS = {"profile": "MOTION_PROFILE", "distance": "MOTION_DISTANCE", "speed": "MOTION_SPEED",
              "acceleration_limit": "MOTION_ACCELERATION_LIMIT", "shaper": "MOTION_SHAPER", "n": "MOTION_ORDER",

@@ -31,7 +31,7 @@ from shapefmu.fmi.kinds.interface import Variable, parameter
 from shapefmu.fmi.native.kernel_fmu import number_by_type, table_fields, variable_rows, write_native_fmu
 from shapefmu.runtime.shaper_designs import CLOSED_FORM
 
-SOURCES = ("sampled_part.c", "sampled_fir.c", "shaper_designs.c")
+SOURCES = ("sampled_part.c", "sampled_fir.c", "sample_clock.c", "shaper_designs.c")
 HEADERS = ("sampled_model.h", "sampled_fir.h", "sample_clock.h", "shaper_designs.h")
 NATIVE_NOTE = ("This FMU is the native C twin of the pythonfmu FMU of the same name: the same variables and "
                "sampled semantics, no Python needed. Its design was made at build time and is stored in its "

@@ -291,6 +291,13 @@ class Fmi2Slave:
                 raise ValueError(f"unknown phase {phase!r}")
             if not isinstance(time, float) or set(kernels) != set(self.model.state_attributes):
                 raise ValueError("the state's time or kernels are malformed")
+            where = state_codec.first_non_finite({"time": time, "values": values, "kernels": kernels}, "state")
+            if where is not None:
+                raise ValueError(f"{where} is not a finite number (fmi2SetReal takes none)")
+            for name, kernel in kernels.items():
+                problem = kernel.state_problem() if hasattr(kernel, "state_problem") else None
+                if problem is not None:
+                    raise ValueError(f"{name}: {problem}")
         except Exception as error:  # noqa: BLE001 - whatever the state holds, it is refused, not raised
             self.error(f"fmi2SetFMUstate: {_describe(error)}")
             return

@@ -6,6 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 from xml.etree import ElementTree as ET
 
+from shapefmu.files import write_bytes
 from shapefmu.fmi.ssp.connectors import Connector, resolve
 from shapefmu.fmi.variable_types import KINDS
 
@@ -49,13 +50,12 @@ def _type_of(value) -> str:
     return "Real"
 
 
-def write_ssv(path, parameters: dict, name: str = PARAMETER_SET) -> Path:
-    """Write ``{variable: value}`` as an SSP 1.0 parameter-value file (.ssv)."""
-    path = Path(path)
+def write_ssv(path, parameters: dict, name: str = PARAMETER_SET, named: bool = True) -> Path:
+    """Write ``{variable: value}`` as an SSP 1.0 parameter-value file (.ssv); ``named``: the user named
+    ``path`` (else it is written beside a file they named, and an existing one is refused: ``shapefmu.files``)."""
     root = parameter_set(name, parameters)
     ET.indent(root)
-    path.write_bytes(ET.tostring(root, encoding="UTF-8", xml_declaration=True))
-    return path
+    return write_bytes(path, ET.tostring(root, encoding="UTF-8", xml_declaration=True), "parameter set", named)
 
 
 def read_ssv(path) -> dict:

@@ -46,6 +46,8 @@ int fmi3_scalar_slot(ModelInstance *inst, fmi3ValueReference vr, ValueType type,
 int fmi3_clocked(void);
 fmi3Status fmi3_clock_start(ModelInstance *inst, const char *function);
 fmi3Status fmi3_clock_before_step(ModelInstance *inst, double t, double h);
+/* After a step of a clocked instance: its position on the clock's grid moves with it. */
+void fmi3_clock_after_step(ModelInstance *inst, double t, double h);
 fmi3Status fmi3_clock_before_step_mode(ModelInstance *inst);
 
 #endif

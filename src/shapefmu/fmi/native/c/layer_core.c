@@ -207,12 +207,14 @@ ModelStatus core_exit_initialization(ModelInstance *inst, const char *function) 
     if (model_part.exit_initialization != NULL && model_part.exit_initialization(inst, function) != MODEL_OK)
         return MODEL_ERROR;
     inst->clock_ticks = 0.0;
+    memset(&inst->clock_position, 0, sizeof inst->clock_position);
     inst->mode = inst->model_exchange ? MODE_EVENT : MODE_STEP_COMPLETE;
     return MODEL_OK;
 }
 
 void core_reset(ModelInstance *inst) {
     inst->time = inst->start_time = inst->clock_ticks = 0.0;
+    memset(&inst->clock_position, 0, sizeof inst->clock_position);
     model_reset(inst);
     inst->mode = MODE_INSTANTIATED;
 }

@@ -20,6 +20,8 @@
 
 #include <stddef.h>
 
+#include "sample_clock.h" /* GridPosition */
+
 /* What a hook and a service return: the values of FMI 2.0's fmi2Status and FMI 3.0's fmi3Status. */
 typedef enum { MODEL_OK, MODEL_WARNING, MODEL_DISCARD, MODEL_ERROR, MODEL_FATAL } ModelStatus;
 
@@ -69,6 +71,7 @@ typedef struct ModelInstance {
     double time;                 /* the FMU's time: start time, then the end of the last step */
     double start_time;           /* fmi2SetupExperiment's startTime (0 if not called) */
     double clock_ticks;          /* ticks of the FMI 3.0 layer's input clock taken (--clock builds) */
+    GridPosition clock_position; /* and where the instance stands on the clock's grid, counted from its steps */
     double *reals;               /* every variable's value, indexed by value reference */
     int *integers, *booleans;
     char *strings;               /* n_string slots of info.string_capacity + 1 characters */
