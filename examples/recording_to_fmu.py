@@ -42,8 +42,8 @@ def main_example() -> None:
     main(["recommend", str(recording), "--axis", "x", "--plot", str(RESULTS / "recommendation.png"),
           "--build", str(fmu)])
     found = identify(recording, axis="x")
-    # what the command picked with --build: among the designs an FMU holds, judged as Klipper judges
-    pick = recommend(klipper.judged_spectra(found.recording, recording), found.modes.modes, buildable=True).pick
+    # what the command picked and wrote with --build, judged as Klipper judges
+    pick = recommend(klipper.judged_spectra(found.recording, recording), found.modes.modes).pick
 
     # the machine as plant FMUs, one per mode; the shaper FMU shapes a unit step (its input held at 1)
     system = System("machine").add("shaper", fmu, parameters={"u": 1.0}, ssv=fmu.with_suffix(".ssv"))
