@@ -136,7 +136,7 @@ def test_json_holds_the_json_alone_with_plot_and_build(tmp_path):
     code, out, err = guarded(["recommend", "--mode", "40:0.05", "--json", "--plot", plot, "--build", fmu], seconds=600)
     assert code == 0, err
     advice = json.loads(out)
-    assert advice["pick"]["fmu_start_values"] and "impulse_times_s" in advice["pick"]
+    assert "impulse_times_s" in advice["pick"]  # what --build wrote: a Shaper's start values, or these impulses
     assert "wrote" in err and "plot written" in err and plot.exists() and fmu.exists()
 
 
