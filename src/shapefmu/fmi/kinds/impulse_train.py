@@ -24,11 +24,9 @@ once); a train whose first impulse comes later gives that dependency a zero weig
 
 import math
 
-from ...runtime.checks import check_count, check_finite, check_positive, check_size
-from ...runtime.sample_clock import FIR_SAMPLE_SECONDS, SampleClock, samples_per_python_step
-from ...runtime.shaper_filter import FeedthroughFIR, StreamingShaper, grid_impulses
+from ...runtime.checks import check_count, check_finite, check_positive
 from .interface import Interface, Variable, input_, output, parameter, sampled_description
-from .model import Model as _Model
+from .model import ImpulseFIRModel
 
 MAX_IMPULSES = 32  # entries declared: 64 parameters of an FMI 2.0 FMU; Klipper's and RRF's shapers hold 2-5
 SUM_TOLERANCE = 1e-9
@@ -109,40 +107,13 @@ def check_train(values):
     return times, amplitudes
 
 
-class Model(_Model):
+class Model(ImpulseFIRModel):
     interface = INTERFACE
-    kernels = (FeedthroughFIR, StreamingShaper, SampleClock)
-    state_attributes = ("fir", "design", "clock")
 
     def initialize(self):
-        values = self.values
-        times, amplitudes = check_train(values)
-        ts = check_positive(values["Ts"], "Ts")
-        u0 = check_finite(values["u0"], "u0")
-        check_size(times[-1] / ts + 1, "MAX_SAMPLED_LENGTH", f"the impulse train, {times[-1]:.6g} s long, sampled at "
-                   f"Ts = {ts!r} s has a delay line of", "samples", "use a longer Ts")
-        delays, weights = grid_impulses(times, amplitudes, ts)
-        self.design = (tuple(times), tuple(amplitudes))
-        self.fir = FeedthroughFIR(delays, weights, u0)
-        fixed, per_term = FIR_SAMPLE_SECONDS
-        self.clock = SampleClock(ts, samples_per_python_step(fixed + per_term * len(delays)))
-        values["y"] = self.fir.output(check_finite(values["u"], "u"))
+        times, amplitudes = check_train(self.values)
+        ts = check_positive(self.values["Ts"], "Ts")
+        self.start_impulses(times, amplitudes, ts, check_finite(self.values["u0"], "u0"), "the impulse train")
 
     def output_dependencies(self):
         return {"y": ["u"]}  # whatever the train: module docstring
-
-    def experiment(self):
-        """DefaultExperiment (start, stop, step): one sample per step, four train lengths."""
-        ts = self.values["Ts"]
-        return 0.0, ts * max(10, math.ceil(4.0 * self.design[0][-1] / ts)), ts
-
-    def picture(self):
-        """The train's impulses."""
-        return [("stems", list(zip(*self.design)))]
-
-    def input_changed(self, name):
-        if self.fir is not None:
-            self.values["y"] = self.fir.output(self.clock.current(self.values["u"]))
-
-    def step(self, t, h):
-        self.values["y"] = self.fir.output(self.clock.advance(t, h, self.values["u"], self.fir.commit))
