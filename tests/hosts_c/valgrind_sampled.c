@@ -19,7 +19,7 @@ static int run(fmi2Component c, fmi2ValueReference u, fmi2ValueReference y, doub
 
 int main(void) {
     const fmi2ValueReference u = vr_of("u"), y = vr_of("y");
-    const int shaper = declares("kind");  /* a Shaper: re-designed in C, its impulses tunable */
+    const int shaper = declares("f[1]");  /* a Shaper: re-designed in C, its impulses tunable */
     double out = 0.0, t = 0.0, value;
     fmi2Component c = initialising();
     if (c == NULL) return 1;
