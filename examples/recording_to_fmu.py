@@ -3,7 +3,7 @@
 A two-mode machine (25 Hz, zeta 0.05 and 62 Hz, zeta 0.08) is recorded as Klipper's TEST_RESONANCES
 records it (a 60 s sweep, 3.2 kHz, jittered timestamps, noise) into results/resonances_x.csv. Then,
 as a user would: identify the modes, judge every shaper family by Klipper's measures, build the pick
-as a native Shaper or ShapeFilter FMU with its .ssv, and co-simulate a move through that FMU in
+as a native FMU (Shaper, ShapeFilter or ImpulseTrain) with its .ssv, and co-simulate a move through that FMU in
 shapefmu's master, driving a native plant FMU of each of the machine's modes (built from
 ``synthetic.plant_model``). The machine's response to the shaped and the unshaped move is drawn in
 results/recording_to_fmu.png, the spectrum with the pick and Klipper's pick in results/recommendation.png.
