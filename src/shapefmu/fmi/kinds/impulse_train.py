@@ -25,7 +25,7 @@ once); a train whose first impulse comes later gives that dependency a zero weig
 import math
 
 from ...runtime.checks import check_count, check_finite, check_positive
-from .interface import Interface, Variable, input_, output, parameter, sampled_description
+from .interface import Interface, Variable, impulse_shaping, parameter, sampled_description
 from .model import ImpulseFIRModel
 
 MAX_IMPULSES = 32  # entries declared: 64 parameters of an FMI 2.0 FMU; Klipper's and RRF's shapers hold 2-5
@@ -48,10 +48,7 @@ INTERFACE = Interface(
         *_entries("impulse_time", "s", "time of impulse {i} (>= 0, increasing with the index)", 0.0, 0.0),
         *_entries("impulse_amplitude", "1", "amplitude of impulse {i} (the amplitudes of the impulses used sum to 1)", None,
                    1.0),
-        parameter("Ts", 1e-4, "sampling period of the filter: u is sampled at startTime + k*Ts", unit="s"),
-        parameter("u0", 0.0, "command before the start time (the filter starts at rest on it)"),
-        input_("u", 0.0, "command to shape"),
-        output("y", "shaped command: sum of the impulse amplitudes times the delayed command"),
+        *impulse_shaping(1e-4),
     ),
     command_in="u",
     command_out="y",

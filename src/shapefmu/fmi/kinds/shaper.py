@@ -27,7 +27,7 @@ import math
 
 from ...runtime import shaper_designs
 from ...runtime.checks import aliased_modes, check_count, check_finite, check_positive, check_vtol
-from .interface import Interface, input_, mode_parameters, output, parameter, sampled_description
+from .interface import Interface, impulse_shaping, mode_parameters, parameter, sampled_description
 from .model import WARNING, ImpulseFIRModel
 
 MAX_MODES = 4
@@ -44,10 +44,7 @@ INTERFACE = Interface(
         parameter("vtol", 0.05, "tolerable residual vibration of ei, ei2, ei3, in (0, 0.25]", maximum=0.25),
         parameter("n_modes", 1, f"number of modes used, 1..{MAX_MODES}", minimum=1, maximum=MAX_MODES),
         *mode_parameters(MAX_MODES, "f", "Hz", lambda i: 10.0 * i),
-        parameter("Ts", 1e-3, "sampling period of the filter: u is sampled at startTime + k*Ts", unit="s"),
-        parameter("u0", 0.0, "command before the start time (the filter starts at rest on it)"),
-        input_("u", 0.0, "command to shape"),
-        output("y", "shaped command: sum of the impulse amplitudes times the delayed command"),
+        *impulse_shaping(1e-3),
     ),
     command_in="u",
     command_out="y",
