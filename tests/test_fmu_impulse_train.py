@@ -30,18 +30,17 @@ TS = 5e-5  # a whole number of nanoseconds, as libcosim's step must be
 
 @pytest.fixture(scope="module")
 def picked(tmp_path_factory):
-    """(the pick's JSON row, the FMU and .ssv) of ``recommend --json --build`` on the recording."""
+    """(the JSON, the FMU it wrote) of ``recommend --json --build`` on the recording."""
     fmu = tmp_path_factory.mktemp("pick") / "Pick.fmu"
     code, out, err = guarded(["recommend", RECORDING, "--axis", "x", "--json", "--build", fmu], seconds=600)
     assert code == 0, err
-    return json.loads(out)["pick"], fmu
+    return json.loads(out), fmu
 
 
 @pytest.fixture(scope="module")
 def train(picked):
-    """(times s, amplitudes) of the picked train: the impulses its JSON row carries."""
-    row, _ = picked
-    assert row["family"] == "train"  # the train designed for the spectrum is the pick on this machine
+    """(times s, amplitudes) of the train recommend designed for the spectrum: its JSON row's impulses."""
+    (row,) = [c for c in picked[0]["candidates"] if c["family"] == "train"]
     return row["impulse_times_s"], row["impulse_amplitudes"]
 
 
@@ -91,7 +90,8 @@ def _starts(times, amplitudes, ts):
 
 
 def test_recommend_build_writes_the_picked_train_as_an_impulse_train_that_shapes_as_its_closed_form(picked, train):
-    row, fmu = picked
+    advice, fmu = picked
+    assert advice["pick"]["family"] == "train"  # the train is the pick on this machine (it dominates Klipper's)
     md = read_model_description(str(fmu))
     starts = {v.name: v.start for v in md.modelVariables if v.causality == "parameter"}
     times, amplitudes = train
