@@ -3,7 +3,7 @@
 A two-mode machine (25 Hz, zeta 0.05 and 62 Hz, zeta 0.08) is recorded as Klipper's TEST_RESONANCES
 records it (a 60 s sweep, 3.2 kHz, jittered timestamps, noise) into results/resonances_x.csv. Then,
 as a user would: identify the modes, judge every shaper family by Klipper's measures, build the pick
-as a native Shaper or ShapeFilter FMU with its .ssv, and co-simulate a move through that FMU in
+as a native FMU (Shaper, ShapeFilter or ImpulseTrain) with its .ssv, and co-simulate a move through that FMU in
 shapefmu's master, driving a native plant FMU of each of the machine's modes (built from
 ``synthetic.plant_model``). The machine's response to the shaped and the unshaped move is drawn in
 results/recording_to_fmu.png, the spectrum with the pick and Klipper's pick in results/recommendation.png.
@@ -42,8 +42,8 @@ def main_example() -> None:
     main(["recommend", str(recording), "--axis", "x", "--plot", str(RESULTS / "recommendation.png"),
           "--build", str(fmu)])
     found = identify(recording, axis="x")
-    # what the command picked with --build: among the designs an FMU holds, judged as Klipper judges
-    pick = recommend(klipper.judged_spectra(found.recording, recording), found.modes.modes, buildable=True).pick
+    # what the command picked and wrote with --build, judged as Klipper judges
+    pick = recommend(klipper.judged_spectra(found.recording, recording), found.modes.modes).pick
 
     # the machine as plant FMUs, one per mode; the shaper FMU shapes a unit step (its input held at 1)
     system = System("machine").add("shaper", fmu, parameters={"u": 1.0}, ssv=fmu.with_suffix(".ssv"))

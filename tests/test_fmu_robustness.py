@@ -18,6 +18,7 @@ from shapefmu.fmi.kinds import KINDS as SLAVES
 # The session fixture (tests/fixtures_fmi.py) that builds each registered FMU.
 FIXTURES = {
     "Shaper": "shaper_fmu",
+    "ImpulseTrain": "impulse_train_fmu",
     "ShapeFilter": "shape_filter_fmu",
     "ReferencePlayer": "reference_fmu",
     "ProfileGenerator": "profile_fmu",

@@ -25,6 +25,7 @@ from pathlib import Path
 
 import pytest
 from support.c_fmus import build_array_gain3
+from support.fixtures_fmi import TRAIN_STARTS
 from hostile_support import guarded
 from test_hostile_arrays import declared
 
@@ -34,6 +35,7 @@ SHAPER = {"kind": "zvd", "n_modes": 1, "f[1]": 13.0, "zeta[1]": 0.05, "Ts": 1e-3
 TWINS = {
     "Shaper 2.0": ("Shaper", "2.0", False, SHAPER),
     "Shaper 3.0 clock": ("Shaper", "3.0", True, SHAPER),
+    "ImpulseTrain 3.0 clock": ("ImpulseTrain", "3.0", True, TRAIN_STARTS),
     "ShapeFilter 3.0": ("ShapeFilter", "3.0", False, {"kind": "hanning", "f": 10.0 / math.sqrt(1 - 0.05**2),
                                                        "zeta": 0.05, "Ts": 1e-3}),
     "EKFTuner 3.0 clock": ("EKFTuner", "3.0", True, {}),

@@ -1,7 +1,7 @@
 """Every native FMU as FMI 3.0 (the generic FMI 3.0 layer, c/fmi3_layer*.c) against its FMI 2.0 twin.
 
 Each kind of native FMU -- the plants, the Shaper (a closed-form and a build-time design), the
-ShapeFilter, the EKF tuner, the STOS controller, the reference player and the profile generator --
+ImpulseTrain, the ShapeFilter, the EKF tuner, the STOS controller, the reference player and the profile generator --
 is built from the same start values as FMI 2.0 and as FMI 3.0. The second opinions:
 
 - fmpy's own FMI 3.0 simulation of the FMI 3.0 FMU equals fmpy's FMI 2.0 simulation of the twin,
@@ -24,6 +24,7 @@ import pytest
 from support import HOSTS_C, MODELS
 from support.c_hosts import fmi3_arguments, fmu_arguments, host_rows, run_host
 from support.cross_platform import PLATFORMS, missing_tools, windows_path
+from support.fixtures_fmi import TRAIN_STARTS
 from support.fixtures_native import FILTERS, ONE_MODE, TWO_MODES, shaper_starts
 from support.valgrind import assert_clean_under_memcheck, requires_valgrind
 
@@ -33,6 +34,7 @@ STOP = 0.5
 CASES = {
     "shaper zvd": ("Shaper", shaper_starts("zvd", TWO_MODES), STOP),
     "shaper ei2": ("Shaper", shaper_starts("ei2", ONE_MODE), STOP),
+    "impulse train": ("ImpulseTrain", TRAIN_STARTS, STOP),
     "filter hanning2": ("ShapeFilter", FILTERS["hanning2"], STOP),
     "filter TP:BC": ("ShapeFilter", FILTERS["TP:BC"], STOP),
     "ekf tuner": ("EKFTuner", {}, STOP),
@@ -41,7 +43,8 @@ CASES = {
     "profile generator": ("ProfileGenerator", {}, STOP),
 }
 # Set in initialisation on both: FMI 2.0 by element, FMI 3.0 as the array (its other elements as built).
-ARRAY_SETS = {"shaper zvd": ("f", 1, 14.5), "filter hanning2": ("tap", 3, 0.125), "plant": ("f", 1, 2100.0)}
+ARRAY_SETS = {"shaper zvd": ("f", 1, 14.5), "impulse train": ("impulse_time", 2, 0.0131),
+              "filter hanning2": ("tap", 3, 0.125), "plant": ("f", 1, 2100.0)}
 
 
 def _job(name, version, clock=False):

@@ -1,8 +1,8 @@
-/* A native Shaper or ShapeFilter FMU through full runs under memcheck: a closed-form re-design in C (a
- * Shaper's), initialisation, steps of every kind (whole samples, off the grid, 1e-16 s, several
- * samples), impulses tuned between steps, the FMU state's round trip, refused calls (a bad
- * parameter, a step over too many samples, a call out of order) with reset, and a second
- * initialisation. */
+/* A native Shaper, ImpulseTrain or ShapeFilter FMU through full runs under memcheck: a closed-form
+ * re-design in C (a Shaper's), initialisation, steps of every kind (whole samples, off the grid,
+ * 1e-16 s, several samples), a Shaper's impulses tuned between steps, the FMU state's round trip,
+ * refused calls (a bad parameter, a step over too many samples, a call out of order) with reset, and
+ * a second initialisation. */
 #include "driver_fmi2.h"
 
 static int run(fmi2Component c, fmi2ValueReference u, fmi2ValueReference y, double *t, int steps, double *out) {
@@ -19,11 +19,11 @@ static int run(fmi2Component c, fmi2ValueReference u, fmi2ValueReference y, doub
 
 int main(void) {
     const fmi2ValueReference u = vr_of("u"), y = vr_of("y");
-    const int impulses = declares("impulse_amplitude[1]");  /* a Shaper: an impulse train, else FIR taps */
+    const int shaper = declares("f[1]");  /* a Shaper: re-designed in C, its impulses tunable */
     double out = 0.0, t = 0.0, value;
     fmi2Component c = initialising();
     if (c == NULL) return 1;
-    if (impulses) {
+    if (shaper) {
         const fmi2ValueReference f1 = vr_of("f[1]"), kind = vr_of("kind");
         const fmi2String mzv = "mzv";
         value = 11.0;
@@ -34,7 +34,7 @@ int main(void) {
     if (run(c, u, y, &t, 150, &out)) return 1;
     fmi2FMUstate state = NULL;
     CHECK(fmi2GetFMUstate(c, &state));
-    if (impulses) {
+    if (shaper) {
         const fmi2ValueReference a1 = vr_of("impulse_amplitude[1]");
         value = 0.5;
         CHECK(fmi2SetReal(c, &a1, 1, &value));                         /* tuned between steps */

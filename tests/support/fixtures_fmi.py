@@ -32,6 +32,15 @@ shaper_fmu = pythonfmu_fixture("Shaper", SHAPER_STARTS)  # a ZV Shaper
 multimode_shaper_fmu = pythonfmu_fixture("Shaper", MULTIMODE_STARTS)  # a simultaneous two-mode Shaper
 
 
+# --- ImpulseTrain FMU (fmi/kinds/impulse_train.py): three impulses off the 1 ms grid, split onto it --
+
+TRAIN_STARTS = {"n_impulses": 3, "impulse_time[2]": 0.0123, "impulse_time[3]": 0.0251, "impulse_amplitude[1]": 0.3,
+                "impulse_amplitude[2]": 0.45, "impulse_amplitude[3]": 0.25, "Ts": 1e-3}
+
+
+impulse_train_fmu = pythonfmu_fixture("ImpulseTrain", TRAIN_STARTS)
+
+
 @pytest.fixture(scope="session")
 def all_fmus(tmp_path_factory):
     """Every registered FMU with default start values (shapefmu.fmi.build_all)."""

@@ -30,6 +30,7 @@ from typing import Callable
 import numpy as np
 import pytest
 
+from shapefmu.fmi.kinds.impulse_train import train_start_values
 from support.fixtures_fmi import EKF_STARTS, STOS_STARTS, time_optimal_solution
 from support.fmpy_slaves import initialised, run_points
 from support.scenarios import EKF_OUTPUTS, OMEGA, SETTLE, TARGET, TS, U, ekf_signals, plant_step, recorded_measurements
@@ -391,3 +392,57 @@ class ReferencePlayerTwin(Twin):
 
 EKF_TUNER, STOS_CONTROLLER, PROFILE_GENERATOR, REFERENCE_PLAYER = (
     EKFTunerTwin(), STOSControllerTwin(), ProfileGeneratorTwin(), ReferencePlayerTwin())
+
+
+# ------------------------------------------------------------------------------------- ImpulseTrain
+
+TRAIN_TS = 2e-4
+TRAINS = {  # (times s, amplitudes): off the grid of TRAIN_TS; the second starts late, with a negative impulse
+    "five": ((0.0, 0.00317, 0.00742, 0.01105, 0.01533), (0.12, 0.27, 0.31, 0.21, 0.09)),
+    "late": ((0.0021, 0.0049, 0.0093), (0.6, -0.2, 0.6)),
+}
+
+
+def _move(pair, times) -> list[dict]:
+    """A command that ramps up over 10 ms, holds, and carries a 230 Hz ripple from 20 ms on."""
+    t = np.asarray(times[:-1])
+    u = np.clip(t / 0.01, 0.0, 1.0) + 0.1 * np.sin(2 * np.pi * 230.0 * t) * (t >= 0.02)
+    return [{"u": float(value)} for value in u]
+
+
+def _shaped(rows) -> None:
+    assert len({row[0] for row in rows}) > 50 and np.ptp(np.asarray(rows)) > 0.9  # it moved, smoothly
+
+
+def _shaped_in_the_host(host_rows) -> None:
+    """fmi2_host's rows (t, u, y)."""
+    assert np.ptp(host_rows[:, 2]) > 1
+
+
+class ImpulseTrainTwin(Twin):
+    """Explicit impulses off the sample grid (split onto it), one train starting at t = 0 and one
+    starting late with a negative impulse and a command resting at u0 = 0.4 before the start."""
+
+    model = "ImpulseTrain"
+    outputs = ("y",)
+    read_before = True
+    host_step = TRAIN_TS
+    steps_of_ts = tuple(Run(case, steps_of(TRAIN_TS, 400), _move, check=_shaped) for case in TRAINS)
+    hosts = Run("five", steps_of(TRAIN_TS, 300), _move)
+    random = tuple(Run(case, random_times(6, 600, lambda rng, n: rng.choice([0.3, 0.5, 1.0, 1.7, 4.0], size=n) * TRAIN_TS,
+                                          9, 1e-13), _move, check=_shaped) for case in TRAINS)
+    changes = (Run("five", steps_of(TRAIN_TS, 400), _move, check=_shaped, parameters={"Ts": 1e-4, "u0": -0.3}),
+               Run("five", steps_of(TRAIN_TS, 400), _move, check=_shaped, parameters={  # another train of three
+                   "n_impulses": 3, "impulse_time[2]": 0.004, "impulse_time[3]": 0.0081, "impulse_time[4]": 0.0,
+                   "impulse_time[5]": 0.0, "impulse_amplitude[1]": 0.25, "impulse_amplitude[2]": 0.5,
+                   "impulse_amplitude[3]": 0.25, "impulse_amplitude[4]": 0.0, "impulse_amplitude[5]": 0.0}))
+    c_host = CHost("five", ("--stop", 0.2, "--step", 1e-3, "--amplitude", 2.0), _shaped_in_the_host)
+    platforms = (Platforms("late", lambda vr: f"input {vr['u']} 1\noutput {vr['y']}\nrun 300 0.0002\n",
+                           lambda rows: np.ptp(rows) > 0.5),)
+    valgrind = ("five", "valgrind_sampled")
+
+    def starts(self, case):
+        return {**train_start_values(*TRAINS[case]), "Ts": TRAIN_TS, "u0": 0.4 if case == "late" else 0.0}
+
+
+IMPULSE_TRAIN = ImpulseTrainTwin()

@@ -2,6 +2,7 @@
 
     shapefmu build [all] [-o DIR]
     shapefmu build shaper --kind simultaneous --mode 2000:0.01 --mode 3000:0.01 [--ts S] -o fmus/DiskDriveShaper.fmu
+    shapefmu build shaper --impulses 0:0.25,0.0101:0.5,0.0202:0.25 [--ts S] -o fmus/Train.fmu   (an ImpulseTrain FMU)
     shapefmu build reference solution.json [--interpolation hold|linear] -o fmus/TimeOptimal.fmu
     shapefmu build shape-filter --kind hanning --mode 10:0.05 --order 2 [--ts S] -o fmus/HanningFilter.fmu
     shapefmu build ekf-tuner [--kind zvd] [--f0 HZ | --omega0 RAD_S] [--ts S] [--amplitude A] [--retune-fraction F] -o ...
@@ -18,6 +19,7 @@ Another target (e.g. ``reference solution.json -o fmus/TimeOptimal.fmu``) is one
 
 from __future__ import annotations
 
+import argparse
 import math
 from pathlib import Path
 
@@ -113,31 +115,87 @@ def _builder(args):
 
 
 def _add_shaper(parser):
+    from shapefmu.fmi.kinds.impulse_train import INTERFACE as TRAIN, MAX_IMPULSES
     from shapefmu.fmi.kinds.shaper import KINDS, MAX_MODES
 
     _add_native(parser)
-    parser.add_argument("--kind", choices=KINDS, default="zvd", help="shaper design (default zvd)")
-    parser.add_argument("--mode", type=parse_mode_hz, action="append", required=True, metavar="HZ[:ZETA]",
-                        help=f"mode frequency in Hz and damping ratio; up to {MAX_MODES}")
-    parser.add_argument("--n", type=int, default=1, help="derivative order of zv_dn (default 1)")
-    parser.add_argument("--vtol", type=float, default=0.05, help="tolerable vibration (default 0.05)")
-    parser.add_argument("--ts", type=float, help="filter sampling period in s (default: 1/100 of the highest mode's period)")
+    given = parser.add_mutually_exclusive_group(required=True)
+    given.add_argument("--mode", type=parse_mode_hz, action="append", metavar="HZ[:ZETA]",
+                       help=f"mode frequency in Hz and damping ratio, the Shaper FMU designed for it; up to {MAX_MODES}")
+    given.add_argument("--impulses", type=parse_impulses, metavar="T:A,T:A,...",
+                       help=f"the impulses themselves, time in s and amplitude, up to {MAX_IMPULSES} (e.g. from "
+                       "recommend's pick): an ImpulseTrain FMU; amplitudes not summing to 1 are divided by their sum")
+    parser.add_argument("--kind", choices=KINDS, help="shaper design for --mode (default zvd)")
+    parser.add_argument("--n", type=int, help="derivative order of zv_dn (default 1)")
+    parser.add_argument("--vtol", type=float, help="tolerable vibration (default 0.05)")
+    parser.add_argument("--ts", type=float, help="filter sampling period in s (default: 1/100 of the highest mode's "
+                        f"period; with --impulses {TRAIN.variable('Ts').start:g} s)")
     parser.add_argument("--allow-aliasing", action="store_true",
                         help="build even when a mode is at or above the Nyquist frequency of --ts (it is left ringing)")
-    parser.add_argument("-o", "--out", default="fmus/Shaper.fmu", type=output_file(".fmu", what="FMU"),
-                        help="FMU file (default fmus/Shaper.fmu)")
+    parser.add_argument("-o", "--out", type=output_file(".fmu", what="FMU"),
+                        help="FMU file (default fmus/Shaper.fmu, with --impulses fmus/ImpulseTrain.fmu)")
+
+
+def parse_impulses(text: str) -> list[tuple[float, float]]:
+    """``"0:0.5,0.01:0.5"`` -> [(t s, amplitude), ...]; the count bounded before the text is read."""
+    from shapefmu.fmi.kinds.impulse_train import MAX_IMPULSES
+
+    count = text.count(",") + 1
+    if count > MAX_IMPULSES:
+        raise argparse.ArgumentTypeError(f"--impulses holds at most {MAX_IMPULSES} impulses, got {count}")
+    impulses = []
+    for i, item in enumerate(text.split(","), 1):
+        time_text, colon, amplitude_text = item.partition(":")
+        try:
+            impulse = (float(time_text), float(amplitude_text))
+        except ValueError:
+            impulse = ()
+        if not colon or len(impulse) != 2 or not all(map(math.isfinite, impulse)):
+            raise argparse.ArgumentTypeError(f"--impulses must be T:A pairs (time s: amplitude) separated by commas, "
+                                             f"e.g. 0:0.5,0.01:0.5; item {i} is {item.strip()!r}")
+        impulses.append(impulse)
+    return impulses
+
+
+def _build_train(args):
+    """The ImpulseTrain FMU of --impulses, amplitudes normalised to sum to 1 (and said so)."""
+    import sys
+
+    from shapefmu.fmi.kinds.impulse_train import SUM_TOLERANCE, train_start_values
+
+    for option in ("kind", "n", "vtol"):
+        if getattr(args, option) is not None:
+            raise ValueError(f"--{option} designs a shaper for --mode; --impulses gives the impulses themselves: not both")
+    if args.allow_aliasing:
+        raise ValueError("--allow-aliasing is for a shaper designed for --mode; --impulses names no mode: leave it out")
+    times, amplitudes = zip(*args.impulses)
+    total = math.fsum(amplitudes)
+    if not (math.isfinite(total) and total != 0.0):
+        raise ValueError(f"--impulses amplitudes must have a finite sum other than 0 (a shaper passes a constant "
+                         f"command as sum times it), got the sum {total!r}")
+    if abs(total - 1.0) > SUM_TOLERANCE:
+        amplitudes = [a / total for a in amplitudes]
+        print(f"note: the --impulses amplitudes summed to {total!r}; each was divided by that sum so they sum to 1",
+              file=sys.stderr)
+    starts = train_start_values(times, amplitudes)
+    if args.ts is not None:
+        starts["Ts"] = args.ts
+    return [_builder(args)("ImpulseTrain", Path(args.out or "fmus/ImpulseTrain.fmu"), **starts)]
 
 
 def _build_shaper(args):
     from shapefmu.fmi.kinds.shaper import MAX_MODES, mode_start_values
     from shapefmu.shapers.catalog import check_sampling, default_sampling_period
 
+    if args.impulses is not None:
+        return _build_train(args)
     if len(args.mode) > MAX_MODES:
         raise ValueError(f"--mode may be given at most {MAX_MODES} times, got {len(args.mode)}")
-    starts = {"kind": args.kind, "n": args.n, "vtol": args.vtol, **mode_start_values(args.mode)}
+    starts = {"kind": args.kind or "zvd", "n": 1 if args.n is None else args.n,
+              "vtol": 0.05 if args.vtol is None else args.vtol, **mode_start_values(args.mode)}
     starts["Ts"] = args.ts if args.ts is not None else default_sampling_period(f for f, _ in args.mode)
     check_sampling([(2.0 * math.pi * f, zeta) for f, zeta in args.mode], starts["Ts"], allow_aliasing=args.allow_aliasing)
-    return [_builder(args)("Shaper", Path(args.out), **starts)]
+    return [_builder(args)("Shaper", Path(args.out or "fmus/Shaper.fmu"), **starts)]
 
 
 def _add_reference(parser):
@@ -268,9 +326,10 @@ def _parameter_target(name: str, default: str):
 TARGETS = {
     "all": ("every FMU with its default parameters", _add_all, _build_all,
             ("shapefmu build all -o fmus", "shapefmu build all --native --fmi-version 3.0 -o fmus3")),
-    "shaper": ("the Shaper FMU with a design baked in", _add_shaper, _build_shaper,
-               ("shapefmu build shaper --kind simultaneous --mode 2000:0.01 --mode 3000:0.01 --ts 1e-6 "
-                "-o fmus/DiskDriveShaper.fmu",)),
+    "shaper": ("the Shaper FMU with a design baked in, or the ImpulseTrain FMU of given impulses", _add_shaper,
+               _build_shaper, ("shapefmu build shaper --kind simultaneous --mode 2000:0.01 --mode 3000:0.01 --ts 1e-6 "
+                               "-o fmus/DiskDriveShaper.fmu",
+                               "shapefmu build shaper --impulses 0:0.25,0.0101:0.5,0.0202:0.25 --native -o fmus/Train.fmu")),
     "reference": ("the ReferencePlayer FMU playing a signal table", _add_reference_native, _build_reference,
                   ("shapefmu build reference results/solution.json -o fmus/TimeOptimal.fmu",)),
     "shape-filter": ("the ShapeFilter FMU with a sampled design baked in", _add_shape_filter, _build_shape_filter,

@@ -125,7 +125,7 @@ def _cmd_recommend(args) -> int:
         spectra = [_model_spectrum(modes)]
         max_freq = max(max_freq, 1.5 * max(m.frequency for m in modes))  # Klipper's --max_freq, to cover them
     axes = (args.axis,) if args.axis in ("x", "y", "z") else ("x", "y")
-    advice = recommend(spectra, modes, firmware_name=args.firmware, buildable=bool(args.build), axes=axes,
+    advice = recommend(spectra, modes, firmware_name=args.firmware, axes=axes,
                        accel=args.accel, scv=args.scv, max_smoothing=args.max_smoothing, max_freq=max_freq,
                        ts=args.filter_ts, progress=_progress() if showing(args) else None)
     if args.json:
@@ -137,7 +137,8 @@ def _cmd_recommend(args) -> int:
 
         say(f"recommendation plot written to {plot_recommendation(spectra, advice, args.plot)}")
     if args.build:
-        for path in _build(advice.pick, Path(args.build), python=args.python, fmi_version=args.fmi_version):
+        for path in _build(advice.pick, Path(args.build), python=args.python, fmi_version=args.fmi_version,
+                           top_hz=max(m.frequency for m in advice.modes)):
             say(f"wrote {path}")
     return 0
 
@@ -194,23 +195,31 @@ def _print_table(advice, recordings: int) -> None:
         print(f"{model} FMU (recommend --build OUT.fmu): " + ", ".join(f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}"
                                                                    for k, v in pick.fmu))
     else:
-        print("impulses (s: amplitude): " + ", ".join(f"{t:.6f}: {a:.4f}" for t, a in zip(pick.times, pick.amplitudes)))
+        print("impulses (s: amplitude), as the ImpulseTrain FMU (recommend --build OUT.fmu, or shapefmu build shaper "
+              "--impulses) takes them: " + ",".join(f"{t!r}:{a!r}" for t, a in zip(pick.times, pick.amplitudes)))
 
 
-def _build(pick, out: Path, *, python: bool, fmi_version: str = "2.0") -> list[Path]:
-    """The pick as a Shaper or ShapeFilter FMU (native unless ``python``; native as FMI
-    ``fmi_version``) and its .ssv parameter set, a file beside it the user did not name (never one that exists)."""
+def _build(pick, out: Path, *, python: bool, fmi_version: str = "2.0", top_hz: float) -> list[Path]:
+    """The pick as a Shaper or ShapeFilter FMU where one designs it, else as an ImpulseTrain FMU of its
+    impulses (normalised to sum to 1, as Klipper applies its shapers); the impulses sampled at 1/200 of
+    the period of the pick's highest frequency (a designed train's: ``top_hz``, the highest mode's)
+    (native unless ``python``; native as FMI ``fmi_version``), and its .ssv parameter set, a file
+    beside it the user did not name (never one that exists)."""
     from shapefmu.fmi.ssp import write_ssv
 
+    starts = dict(pick.fmu or {})
+    ts = 1.0 / (200.0 * max(pick.frequencies or (top_hz,)))
     if pick.fmu is None:
-        raise ValueError(f"the pick ({pick.label}, {pick.family}) is not a design an FMU kind holds")
-    starts = dict(pick.fmu)
-    if pick.family == "window":
+        from shapefmu.fmi.kinds.impulse_train import train_start_values
+
+        total = math.fsum(pick.amplitudes)
+        model = "ImpulseTrain"
+        starts = {**train_start_values(pick.times, [a / total for a in pick.amplitudes]), "Ts": ts}
+    elif pick.family == "window":
         model = "ShapeFilter"
     else:
         model = "Shaper"
-        starts = {"n": 1, "n_modes": 1, **starts}
-        starts["Ts"] = 1.0 / (200.0 * max(pick.frequencies))
+        starts = {"n": 1, "n_modes": 1, **starts, "Ts": ts}
     if python:
         if fmi_version != "2.0":
             raise ValueError(f"--fmi-version {fmi_version} needs the native FMU: the pythonfmu FMUs (--python) are "
@@ -275,8 +284,8 @@ def register(commands) -> None:
     p.add_argument("--plot", metavar="PNG", type=output_file("plot"),
                    help="save the spectrum, its modes, the pick, Klipper's pick and three more")
     p.add_argument("--build", metavar="OUT.fmu", type=output_file(".fmu", what="FMU"),
-                   help="with --firmware fmu: pick among the designs an FMU holds and write it as a Shaper or "
-                        "ShapeFilter FMU (native C) and OUT.ssv beside it")
+                   help="with --firmware fmu: write the pick as an FMU (native C), a Shaper or ShapeFilter where it "
+                        "is one of their designs, else an ImpulseTrain of its impulses, and OUT.ssv beside it")
     p.add_argument("--python", action="store_true", help="with --build: the pythonfmu FMU instead of the native one")
     p.add_argument("--fmi-version", choices=("2.0", "3.0"), default="2.0",
                    help="with --build: FMI version of the native FMU (default 2.0; 3.0: array parameters)")

@@ -169,14 +169,13 @@ class _Rule:
         return (int(order[kept[0]]), True) if kept.size else (int(order[0]), False)
 
 
-def recommend(spectra, modes, *, firmware_name: str = "fmu", buildable: bool = False, axes=("x",),
+def recommend(spectra, modes, *, firmware_name: str = "fmu", axes=("x",),
               dampings=metrics.KLIPPER_DAMPINGS, accel: float = metrics.DEFAULT_ACCEL,
               scv: float = metrics.DEFAULT_SCV, max_smoothing: float = metrics.DEFAULT_MAX_SMOOTHING,
               max_freq: float = metrics.MAX_FREQ, ts: float = DEFAULT_TS, progress=None) -> Recommendation:
     """Klipper's pick and the pick for ``firmware_name`` on ``spectra`` (``Spectrum`` objects judged as
     Klipper judges, e.g. ``klipper.read_spectrum_file``) for the identified ``modes``; module docstring.
-    ``buildable`` keeps to what a Shaper / ShapeFilter FMU holds (``fmu`` with ``--build``); ``axes``
-    name the axes in the firmware lines; ``max_freq`` is Klipper's (200 Hz, or its --max_freq)."""
+    ``axes`` name the axes in the firmware lines; ``max_freq`` is Klipper's (200 Hz, or its --max_freq)."""
     spectra = list(spectra)
     modes = tuple(modes)
     _check(spectra, modes, firmware_name, accel, scv, max_smoothing, ts)
@@ -191,7 +190,7 @@ def recommend(spectra, modes, *, firmware_name: str = "fmu", buildable: bool = F
     rule = _Rule(judge, reference)
     top = max(max_freq, 2.0 * max(m.frequency for m in modes))
     left_out: list[str] = []
-    batches = _batches(firmware_name, buildable, judge, reference, modes, top, axes, ts, left_out, say)
+    batches = _batches(firmware_name, judge, reference, modes, top, axes, ts, left_out, say)
     chosen, scored = [], 0
     for batch in batches:
         kept = np.flatnonzero(rule.shares_kept(batch.amplitudes))
@@ -229,7 +228,7 @@ def _verdict(pick, reference) -> str:
     return "better score than Klipper's pick" if pick.score <= reference.score else "worse score than Klipper's pick"
 
 
-def _batches(target, buildable, judge, reference, modes, top, axes, ts, left_out, say) -> list[families.Batch]:
+def _batches(target, judge, reference, modes, top, axes, ts, left_out, say) -> list[families.Batch]:
     """The candidates' batches for ``target`` (module docstring)."""
     train = None
     own = families.Batch(reference.kind, "klipper", np.array([reference.frequencies]), reference.zetas,
@@ -241,7 +240,7 @@ def _batches(target, buildable, judge, reference, modes, top, axes, ts, left_out
     if target == "marlin":
         say("Marlin's shapers at every 0.1 Hz")
         return families.marlin_scan(top, axes)
-    if target in ("rrf", "fmu") and not buildable:
+    if target in ("rrf", "fmu"):
         say(f"a train of {TRAIN_IMPULSES} impulses designed for the spectrum")
         train = trains.design(judge, (reference.times, reference.amplitudes), TRAIN_IMPULSES)
         if train is None:
@@ -256,8 +255,6 @@ def _batches(target, buildable, judge, reference, modes, top, axes, ts, left_out
     zeta = float(min(np.median([m.zeta for m in modes]), 0.5))
     say("the design layer's shapers and filters")
     batches = families.design_layer(modes, zeta, ts, left_out)
-    if buildable:  # Klipper's pick where an FMU holds it
-        return batches + ([own] if own.build(0) else [])
     batches.append(own)
     if train is not None:
         batches.append(families.Batch("train", "train", np.zeros((1, 0)), (), train[0][None], train[1][None]))

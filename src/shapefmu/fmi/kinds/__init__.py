@@ -15,6 +15,7 @@ import importlib
 
 KINDS = {
     "Shaper": "shaper",
+    "ImpulseTrain": "impulse_train",
     "ShapeFilter": "shape_filter",
     "ReferencePlayer": "reference_player",
     "ProfileGenerator": "profile_generator",

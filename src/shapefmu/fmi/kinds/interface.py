@@ -73,6 +73,17 @@ def mode_parameters(count, frequency, unit, frequency_start, zeta_start=0.0, mod
     return tuple(variables)
 
 
+def impulse_shaping(ts_start):
+    """The variables after an impulse shaper's design parameters: its sampling period ``Ts``
+    (starting at ``ts_start`` s), the command ``u0`` before the start, the command ``u`` in and ``y`` out."""
+    return (
+        parameter("Ts", ts_start, "sampling period of the filter: u is sampled at startTime + k*Ts", unit="s"),
+        parameter("u0", 0.0, "command before the start time (the filter starts at rest on it)"),
+        input_("u", 0.0, "command to shape"),
+        output("y", "shaped command: sum of the impulse amplitudes times the delayed command"),
+    )
+
+
 def sampled_description(summary, inputs, period="Ts"):
     """A sampled FMU's description: ``summary`` and the semantics of its clock."""
     return (

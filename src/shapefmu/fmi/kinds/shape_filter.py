@@ -44,10 +44,9 @@ import math
 
 from ...runtime import time_frequency, twin_pulse, window_filters
 from ...runtime.checks import check_count, check_finite, check_positive, check_zeta
-from ...runtime.sample_clock import FIR_SAMPLE_SECONDS, SampleClock, samples_per_python_step
-from ...runtime.shaper_filter import FeedthroughFIR, StreamingShaper
+from ...runtime.shaper_filter import FeedthroughFIR
 from .interface import Interface, input_, output, parameter, sampled_description
-from .model import Model as _Model
+from .model import SampledFIRModel
 
 WINDOW_KINDS = tuple(window_filters.WINDOW_FILTERS)
 KINDS = (*WINDOW_KINDS, *twin_pulse.KINDS, "time-frequency")
@@ -139,9 +138,8 @@ INTERFACE = Interface(
 )
 
 
-class Model(_Model):
+class Model(SampledFIRModel):
     interface = INTERFACE
-    kernels = (FeedthroughFIR, StreamingShaper, SampleClock)
     state_attributes = ("fir", "taps", "clock")
 
     def initialize(self):
@@ -151,12 +149,8 @@ class Model(_Model):
         if abs(taps[0]) <= _ZERO_TAP * max(abs(w) for w in taps):
             taps = [0.0, *taps[1:]]
         self.taps = tuple(taps)
-        self.fir = FeedthroughFIR.from_taps(taps, u0)
-        fixed, per_term = FIR_SAMPLE_SECONDS
-        terms = sum(1 for w in taps if w != 0.0)
-        self.clock = SampleClock(ts, samples_per_python_step(fixed + per_term * terms))
         values["Ts_used"] = ts
-        values["y"] = self.fir.output(check_finite(values["u"], "u"))
+        self.start(FeedthroughFIR.from_taps(taps, u0), ts, sum(1 for w in taps if w != 0.0))
 
     def output_dependencies(self):
         return {"y": ["u"] if self.fir.w0 != 0.0 else [], "Ts_used": []}
@@ -169,10 +163,3 @@ class Model(_Model):
     def picture(self):
         """The filter's taps."""
         return [("stems", list(enumerate(self.taps)))]
-
-    def input_changed(self, name):
-        if self.fir is not None:
-            self.values["y"] = self.fir.output(self.clock.current(self.values["u"]))
-
-    def step(self, t, h):
-        self.values["y"] = self.fir.output(self.clock.advance(t, h, self.values["u"], self.fir.commit))

@@ -26,11 +26,9 @@ un-done.
 import math
 
 from ...runtime import shaper_designs
-from ...runtime.checks import aliased_modes, check_count, check_finite, check_positive, check_size, check_vtol
-from ...runtime.sample_clock import FIR_SAMPLE_SECONDS, SampleClock, samples_per_python_step
-from ...runtime.shaper_filter import FeedthroughFIR, StreamingShaper, grid_impulses
-from .interface import Interface, input_, mode_parameters, output, parameter, sampled_description
-from .model import WARNING, Model as _Model
+from ...runtime.checks import aliased_modes, check_count, check_finite, check_positive, check_vtol
+from .interface import Interface, impulse_shaping, mode_parameters, parameter, sampled_description
+from .model import WARNING, ImpulseFIRModel
 
 MAX_MODES = 4
 KINDS = shaper_designs.KINDS
@@ -46,10 +44,7 @@ INTERFACE = Interface(
         parameter("vtol", 0.05, "tolerable residual vibration of ei, ei2, ei3, in (0, 0.25]", maximum=0.25),
         parameter("n_modes", 1, f"number of modes used, 1..{MAX_MODES}", minimum=1, maximum=MAX_MODES),
         *mode_parameters(MAX_MODES, "f", "Hz", lambda i: 10.0 * i),
-        parameter("Ts", 1e-3, "sampling period of the filter: u is sampled at startTime + k*Ts", unit="s"),
-        parameter("u0", 0.0, "command before the start time (the filter starts at rest on it)"),
-        input_("u", 0.0, "command to shape"),
-        output("y", "shaped command: sum of the impulse amplitudes times the delayed command"),
+        *impulse_shaping(1e-3),
     ),
     command_in="u",
     command_out="y",
@@ -72,10 +67,8 @@ def mode_start_values(modes_hz):
     return values
 
 
-class Model(_Model):
+class Model(ImpulseFIRModel):
     interface = INTERFACE
-    kernels = (FeedthroughFIR, StreamingShaper, SampleClock)
-    state_attributes = ("fir", "design", "clock")
 
     def initialize(self):
         values = self.values
@@ -85,15 +78,8 @@ class Model(_Model):
         u0 = check_finite(values["u0"], "u0")
         modes = shaper_designs.parameter_modes(values, MAX_MODES)
         times, amplitudes = shaper_designs.design_impulses(values["kind"], modes, n, vtol)
-        check_size(times[-1] / ts + 1, "MAX_SAMPLED_LENGTH", f"the {values['kind']} shaper, {times[-1]:.6g} s long, "
-                   f"sampled at Ts = {ts!r} s has a delay line of", "samples", "use a longer Ts")
         self._warn_above_nyquist(modes, ts)
-        delays, weights = grid_impulses(times, amplitudes, ts)
-        self.design = (tuple(times), tuple(amplitudes))
-        self.fir = FeedthroughFIR(delays, weights, u0)
-        fixed, per_term = FIR_SAMPLE_SECONDS
-        self.clock = SampleClock(ts, samples_per_python_step(fixed + per_term * len(delays)))
-        values["y"] = self.fir.output(check_finite(values["u"], "u"))
+        self.start_impulses(times, amplitudes, ts, u0, f"the {values['kind']} shaper")
 
     def _warn_above_nyquist(self, modes, ts):
         """A mode at or above the Nyquist frequency of Ts is left ringing: say so through the logger."""
@@ -106,19 +92,3 @@ class Model(_Model):
 
     def output_dependencies(self):
         return {"y": ["u"] if self.fir.w0 != 0.0 else []}
-
-    def experiment(self):
-        """DefaultExperiment (start, stop, step): one sample per step, four shaper lengths."""
-        ts = self.values["Ts"]
-        return 0.0, ts * max(10, math.ceil(4.0 * self.design[0][-1] / ts)), ts
-
-    def picture(self):
-        """The impulses the shaper is designed with."""
-        return [("stems", list(zip(*self.design)))]
-
-    def input_changed(self, name):
-        if self.fir is not None:
-            self.values["y"] = self.fir.output(self.clock.current(self.values["u"]))
-
-    def step(self, t, h):
-        self.values["y"] = self.fir.output(self.clock.advance(t, h, self.values["u"], self.fir.commit))

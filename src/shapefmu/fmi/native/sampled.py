@@ -1,6 +1,6 @@
-"""Native C Shaper and ShapeFilter FMUs: the kinds' variables and design, run in C.
+"""Native C Shaper, ImpulseTrain and ShapeFilter FMUs: the kinds' variables and design, run in C.
 
-``build_native_fmu("Shaper" | "ShapeFilter", out_path, **start_values) -> Path`` writes an FMI 2.0
+``build_native_fmu("Shaper" | "ImpulseTrain" | "ShapeFilter", out_path, **start_values) -> Path`` writes an FMI 2.0
 Co-Simulation FMU that needs no Python on the host: the generic FMI 2.0 layer (``c/fmi2_layer*.c``),
 the sampled filters' model part (``c/sampled_part.c``, ``c/sampled_fir.c``, ``c/shaper_designs.c``)
 and a generated ``model.c`` of a few dozen lines (its variables, start values and design),
@@ -9,7 +9,8 @@ packaged by ``kernel_fmu.write_native_fmu`` (sources/, binaries for every platfo
 The design is made here, at build time, by the same code the pythonfmu FMU runs at initialisation
 (the kind's model, ``shapefmu.fmi.kinds``: any shaper kind, single and multi-mode), and stored as parameters:
 ``impulse_time[i]`` (s) and ``impulse_amplitude[i]`` of a Shaper, ``tap[i]`` of a ShapeFilter, with
-the sampling period. They are tunable. The variables of the pythonfmu FMU keep their names, types and
+the sampling period. They are tunable. An ImpulseTrain declares its impulses itself (fixed, as its
+pythonfmu FMU does): the C checks them at the exit of initialisation as ``kinds.impulse_train.check_train``. The variables of the pythonfmu FMU keep their names, types and
 start values, so an SSP can bind either FMU: a closed-form Shaper (zv, zvd, zvdd, zv_dn, mzv)
 re-designs in C when kind, n, n_modes, f[i] or zeta[i] change before initialisation (as many
 impulses as this FMU holds: ``impulses_per_mode ** n_modes`` of its build kind), a Shaper's ``Ts``
@@ -27,12 +28,14 @@ import sys
 from pathlib import Path
 
 from shapefmu.fmi.kinds import designed
+from shapefmu.fmi.kinds.impulse_train import MAX_IMPULSES as MAX_TRAIN_IMPULSES
 from shapefmu.fmi.kinds.interface import Variable, parameter
 from shapefmu.fmi.native.kernel_fmu import number_by_type, table_fields, variable_rows, write_native_fmu
 from shapefmu.runtime.shaper_designs import CLOSED_FORM
 
-SOURCES = ("sampled_part.c", "sampled_fir.c", "sample_clock.c", "shaper_designs.c")
-HEADERS = ("sampled_model.h", "sampled_fir.h", "sample_clock.h", "shaper_designs.h")
+SOURCES = ("sampled_part.c", "sampled_fir.c", "sample_clock.c", "shaper_designs.c", "exact_sum.c")
+HEADERS = ("sampled_model.h", "sampled_fir.h", "sample_clock.h", "shaper_designs.h", "exact_sum.h")
+IMPULSE_KINDS = ("Shaper", "ImpulseTrain")  # the kinds whose FIR is made of impulses
 NATIVE_NOTE = ("This FMU is the native C twin of the pythonfmu FMU of the same name: the same variables and "
                "sampled semantics, no Python needed. Its design was made at build time and is stored in its "
                "parameters (impulse_time[i] and impulse_amplitude[i], or tap[i]); sources/ holds its C code.")
@@ -45,10 +48,11 @@ def _meaning(model: str, name: str) -> str:
     """The SampledMeaning of variable ``name`` (sampled_model.h)."""
     base = name.partition("[")[0]
     common = {"u": "MEANS_INPUT", "y": "MEANS_OUTPUT", "u0": "MEANS_REST", "Ts_used": "MEANS_PERIOD_USED",
-              "impulse_time": "MEANS_IMPULSE_TIME", "impulse_amplitude": "MEANS_IMPULSE_AMPLITUDE", "tap": "MEANS_TAP"}
+              "impulse_time": "MEANS_IMPULSE_TIME", "impulse_amplitude": "MEANS_IMPULSE_AMPLITUDE", "tap": "MEANS_TAP",
+              "n_impulses": "MEANS_COUNT"}
     shaper = {"Ts": "MEANS_PERIOD", "kind": "MEANS_KIND", "n": "MEANS_ORDER", "n_modes": "MEANS_MODES",
               "f": "MEANS_FREQUENCY", "zeta": "MEANS_DAMPING", "vtol": "MEANS_TOLERANCE"}
-    meanings = {**common, **shaper} if model == "Shaper" else common
+    meanings = {**common, **shaper} if model in IMPULSE_KINDS else common
     return meanings.get(base, "MEANS_BUILD_VALUE")
 
 
@@ -56,6 +60,8 @@ def _design_variables(model) -> tuple[list[Variable], dict, int, bool]:
     """The design parameters to add (impulses or taps), their values, the capacity and whether the
     Shaper's kind re-designs in C."""
     values, extra = {}, []
+    if model.interface.name == "ImpulseTrain":  # its interface declares the impulses
+        return extra, values, MAX_TRAIN_IMPULSES, False
 
     def add(name, unit, description, value):
         extra.append(parameter(name, float(value), description, unit, variability="tunable"))
@@ -95,7 +101,7 @@ static const VariableRow rows[] = {{
 }};
 
 const SampledModel sampled_model = {{
-    {int(name == "Shaper")}, {int(closed)}, {int(feedthrough)}, {max_modes(model)},
+    {int(name in IMPULSE_KINDS)}, {int(closed)}, {int(feedthrough)}, {max_modes(model)},
     {capacity}, {repr(float(model.values.get("Ts_used", 0.0)))},
     {{{table_fields(variables, guid)}, rows}}
 }};
@@ -108,9 +114,9 @@ def max_modes(model) -> int:
 
 
 def build_native_fmu(name: str, out_path, *, fmi_version: str = "2.0", clock: bool = False, **start_values) -> Path:
-    """Build the native ``name`` ("Shaper" or "ShapeFilter") FMU with ``start_values`` to ``out_path``."""
-    if name not in ("Shaper", "ShapeFilter"):
-        raise ValueError(f"name must be Shaper or ShapeFilter, got {name!r}")
+    """Build the native ``name`` ("Shaper", "ImpulseTrain" or "ShapeFilter") FMU with ``start_values`` to ``out_path``."""
+    if name not in (*IMPULSE_KINDS, "ShapeFilter"):
+        raise ValueError(f"name must be Shaper, ImpulseTrain or ShapeFilter, got {name!r}")
     model = designed(name, start_values)
     extra, values, capacity, closed = _design_variables(model)
     values.update(model.values)
@@ -127,6 +133,11 @@ def build_native_fmu(name: str, out_path, *, fmi_version: str = "2.0", clock: bo
 def build_native_shaper(out_path, *, fmi_version: str = "2.0", clock: bool = False, **start_values) -> Path:
     """The native Shaper FMU (``build_native_fmu("Shaper", ...)``)."""
     return build_native_fmu("Shaper", out_path, fmi_version=fmi_version, clock=clock, **start_values)
+
+
+def build_native_impulse_train(out_path, *, fmi_version: str = "2.0", clock: bool = False, **start_values) -> Path:
+    """The native ImpulseTrain FMU (``build_native_fmu("ImpulseTrain", ...)``)."""
+    return build_native_fmu("ImpulseTrain", out_path, fmi_version=fmi_version, clock=clock, **start_values)
 
 
 def build_native_shape_filter(out_path, *, fmi_version: str = "2.0", clock: bool = False, **start_values) -> Path:

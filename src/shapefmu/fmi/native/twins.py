@@ -16,6 +16,7 @@ from pathlib import Path
 # model name -> (module, builder(out_path, **start_values) -> Path)
 TWINS = {
     "Shaper": ("shapefmu.fmi.native.sampled", "build_native_shaper"),
+    "ImpulseTrain": ("shapefmu.fmi.native.sampled", "build_native_impulse_train"),
     "ShapeFilter": ("shapefmu.fmi.native.sampled", "build_native_shape_filter"),
     "EKFTuner": ("shapefmu.fmi.native.ekf_tuner", "build_native_ekf_tuner"),
     "STOSController": ("shapefmu.fmi.native.stos", "build_native_stos"),

@@ -7,6 +7,8 @@
  * ShapeFilter. A Shaper of a closed-form kind (zv, zvd, zvdd, zv_dn, mzv) re-designs in C when its
  * kind, n, n_modes, f[i] or zeta[i] change before initialisation; every other design parameter
  * (kind of a design made only at build time, a filter's window, order, ...) keeps its build value.
+ * An ImpulseTrain (a count of impulses declared) holds impulses given by the user, checked at the
+ * exit of initialisation: times increasing, amplitudes summing to 1, the unused entries 0.
  */
 #ifndef SAMPLED_MODEL_H
 #define SAMPLED_MODEL_H
@@ -28,11 +30,12 @@ typedef enum {
     MEANS_FREQUENCY,         /* f[i], Hz */
     MEANS_DAMPING,           /* zeta[i] */
     MEANS_TOLERANCE,         /* vtol, in (0, 1) */
+    MEANS_COUNT,             /* n_impulses of an ImpulseTrain: the impulses used, checked as a train */
     MEANS_BUILD_VALUE        /* a design parameter that keeps its build value */
 } SampledMeaning;
 
 typedef struct {
-    int impulses;            /* 1: a Shaper (impulses), 0: a ShapeFilter (taps) */
+    int impulses;            /* 1: a Shaper or ImpulseTrain (impulses), 0: a ShapeFilter (taps) */
     int closed_form;         /* a Shaper whose kind re-designs in C */
     int feedthrough;         /* y declared to depend on u (ModelStructure) */
     int max_modes;           /* f[1..max_modes], zeta[1..max_modes] */

@@ -1,4 +1,4 @@
-/* The sampled filters' model part: what every native Shaper and ShapeFilter FMU
+/* The sampled filters' model part: what every native Shaper, ImpulseTrain and ShapeFilter FMU
  * (sampled_model.h, a generated model.c) does behind the generic layer. Written once.
  *
  * At the exit of initialisation the design parameters become the taps of a sampled FIR
@@ -14,6 +14,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "exact_sum.h"
 #include "sampled_fir.h"
 #include "sampled_model.h"
 #include "shaper_designs.h"
@@ -21,6 +22,8 @@
 #define PI 3.14159265358979323846
 /* f[i], zeta[i] pairs a Shaper may declare. */
 #define MAX_MODES 16
+/* How far from 1 an ImpulseTrain's amplitudes may sum (kinds/impulse_train.py: SUM_TOLERANCE). */
+#define SUM_TOLERANCE 1e-9
 
 typedef struct {
     SampledFir fir;
@@ -29,7 +32,7 @@ typedef struct {
     double *taps;            /* the dense taps of a re-grid, length + 2 */
     double *scratch;         /* 2 * capacity doubles for the closed-form design */
     /* value references by meaning (first entry of an array); SIZE_MAX if absent */
-    size_t u, y, period, rest, kind, order, modes, time, amplitude, tap;
+    size_t u, y, period, rest, kind, order, modes, time, amplitude, tap, count;
     size_t frequency[MAX_MODES], damping[MAX_MODES]; /* f[i], zeta[i] are interleaved */
 } Sampled;
 
@@ -139,11 +142,35 @@ static ModelStatus design(ModelInstance *inst, const char *function) {
     return MODEL_OK;
 }
 
+/* An ImpulseTrain's impulses 1..n_impulses as kinds/impulse_train.py's check_train takes them (each time
+ * >= 0 and finite, each amplitude finite, were checked when set): times increasing, the entries after
+ * n_impulses 0, the amplitudes summing to 1 within SUM_TOLERANCE (their correctly rounded sum, as fsum). */
+static ModelStatus check_train(ModelInstance *inst, const char *function) {
+    const Sampled *s = sampled_of(inst);
+    const int n = inst->integers[s->count - sampled_model.variables.n_real];
+    const double *times = inst->reals + s->time, *amplitudes = inst->reals + s->amplitude;
+    for (int i = 1; i < n; i++)
+        if (!(times[i] > times[i - 1]))
+            return model_fail(inst, "%s: impulse_time[%d] must be > impulse_time[%d] = %.17g s (times increase with "
+                             "the index), got %.17g", function, i + 1, i, times[i - 1], times[i]);
+    for (int i = n; i < sampled_model.capacity; i++)
+        if (times[i] != 0.0 || amplitudes[i] != 0.0)
+            return model_fail(inst, "%s: impulse_time[%d] and impulse_amplitude[%d] must be 0 since n_impulses = %d "
+                             "uses impulses 1..%d only, got %.17g and %.17g; raise n_impulses to use them", function,
+                             i + 1, i + 1, n, n, times[i], amplitudes[i]);
+    const double total = exact_sum(amplitudes, n);
+    if (!(fabs(total - 1.0) <= SUM_TOLERANCE))
+        return model_fail(inst, "%s: impulse_amplitude[1..%d] must sum to 1 within %g, got the sum %.17g", function, n,
+                         SUM_TOLERANCE, total);
+    return MODEL_OK;
+}
+
 static ModelStatus update(ModelInstance *inst, const char *function);
 
 static ModelStatus exit_initialization(ModelInstance *inst, const char *function) {
     Sampled *s = sampled_of(inst);
     if (sampled_model.closed_form && s->design_changed && design(inst, function) != MODEL_OK) return MODEL_ERROR;
+    if (s->count != (size_t)-1 && check_train(inst, function) != MODEL_OK) return MODEL_ERROR;
     const double longest = longest_delay(inst), ts = period(inst);
     if (longest > MAX_DELAY_SAMPLES)
         return model_fail(inst, "%s: the design's longest delay spans %.0f samples of Ts = %g s; at most %ld (the "
@@ -251,6 +278,10 @@ static ModelStatus check_integer(ModelInstance *inst, size_t vr, int value, cons
         if (value < 1 || value > sampled_model.max_modes)
             return model_fail(inst, "%s: n_modes must be in [1, %d], got %d", function, sampled_model.max_modes, value);
         return keeps_integer(inst, vr, value, sampled_model.closed_form || value == v->start, function);
+    case MEANS_COUNT:
+        if (value < 1 || value > sampled_model.capacity)
+            return model_fail(inst, "%s: n_impulses must be in [1, %d], got %d", function, sampled_model.capacity, value);
+        return MODEL_OK;
     default: return keeps_integer(inst, vr, value, value == (int)v->start, function);
     }
 }
@@ -354,7 +385,7 @@ static int instantiate(ModelInstance *inst) {
     s->u = first_of(MEANS_INPUT), s->y = first_of(MEANS_OUTPUT), s->rest = first_of(MEANS_REST);
     s->period = first_of(MEANS_PERIOD), s->kind = first_of(MEANS_KIND), s->order = first_of(MEANS_ORDER);
     s->modes = first_of(MEANS_MODES), s->time = first_of(MEANS_IMPULSE_TIME);
-    s->amplitude = first_of(MEANS_IMPULSE_AMPLITUDE), s->tap = first_of(MEANS_TAP);
+    s->amplitude = first_of(MEANS_IMPULSE_AMPLITUDE), s->tap = first_of(MEANS_TAP), s->count = first_of(MEANS_COUNT);
     for (size_t vr = 0; vr < n_variables(); vr++) {
         const VariableRow *v = row(vr);
         if (element(v) >= MAX_MODES) continue;
