@@ -42,8 +42,7 @@ def _identify_all(args):
         raise ValueError(f"at most 64 recordings are judged together, got {len(args.recording)}")
     axis = _axis(args.axis)
     return [identify(path, axis=axis, time_column=args.time, fs=args.fs, columns=args.column or None,
-                     undo_sweep=args.undo_sweep, excitation=args.excitation, response=args.response,
-                     f_min=args.f_min, f_max=args.f_max, ringdown=args.ringdown) for path in args.recording]
+                     undo_sweep=args.undo_sweep, excitation=args.excitation, f_min=args.f_min, f_max=args.f_max, ringdown=args.ringdown) for path in args.recording]
 
 
 def _print_identified(found) -> None:
@@ -53,12 +52,12 @@ def _print_identified(found) -> None:
         print(f"{found.spectrum.source}: Klipper spectrum file, axis {found.spectrum.axis}")
     print(f"  spectrum: {found.spectrum.settings}")
     modes = found.modes
+    for note in modes.notes:
+        print(f"  {note}")
     if not modes.modes:
-        print(f"  no resonance above the threshold: no peak within 3 decades of the highest with a prominence of "
-              f"0.5 decades (noise floor {modes.noise_floor:.3g})")
         return
-    print(f"  {len(modes.modes)} mode(s), {modes.response} response, {modes.excitation} excitation "
-          f"(standard errors from the fit; a lower bound):")
+    print(f"  {len(modes.modes)} mode(s), {modes.excitation} excitation (standard errors and the damping's 90 % "
+          f"interval from the fit):")
     for mode in modes.modes:
         print(f"    {mode.describe()}")
 
@@ -68,8 +67,10 @@ def _cmd_identify(args) -> int:
     if args.json:
         print(json.dumps([{"source": f.spectrum.source, "settings": f.spectrum.settings,
                            "modes": [{"frequency_hz": m.frequency, "zeta": m.zeta, "frequency_sd": m.frequency_sd,
-                                      "zeta_sd": m.zeta_sd, "method": m.method,
-                                      "log_decrement_zeta": m.log_decrement_zeta} for m in f.modes.modes]}
+                                      "zeta_sd": m.zeta_sd, "zeta_interval_90": m.zeta_interval,
+                                      "peak_frequency_hz": m.peak_frequency, "method": m.method,
+                                      "log_decrement_zeta": m.log_decrement_zeta} for m in f.modes.modes],
+                           "notes": list(f.modes.notes)}
                           for f in found], indent=2))
     else:
         for f in found:
@@ -210,8 +211,6 @@ def _add_reading(p) -> None:
                    help="divide out the f^2 of Klipper's sweep (acceleration proportional to frequency)")
     p.add_argument("--excitation", choices=("sweep", "flat"),
                    help="the excitation's spectrum: sweep (f^2, default for Klipper files) or flat")
-    p.add_argument("--response", choices=("transmitted", "mode"), default="transmitted",
-                   help="transmitted: an accelerometer on the carried part (default); mode: a displacement or error")
     p.add_argument("--f-min", type=float, metavar="HZ", help="lowest frequency searched")
     p.add_argument("--f-max", type=float, metavar="HZ", help="highest frequency searched")
     p.add_argument("--ringdown", action="store_true", help="the recording is a free decay: refine each mode with the EKF")

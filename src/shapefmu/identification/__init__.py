@@ -36,14 +36,20 @@ class Identified:
 
 
 def identify(path, *, axis="xyz", time_column=None, fs=None, columns=None, undo_sweep: bool = False,
-             excitation: str | None = None, response: str = "transmitted", f_min=None, f_max=None,
-             ringdown: bool = False, resolution: float | None = None, prominence: float = 0.5) -> Identified:
+             excitation: str | None = None, f_min=None, f_max=None, ringdown: bool = False,
+             resolution: float | None = None) -> Identified:
     """Read ``path`` (any format of ``recordings``), take the spectrum along ``axis`` and find its modes.
 
-    ``excitation`` defaults to ``"sweep"`` for Klipper's files (its ``TEST_RESONANCES`` sweep) and
-    ``"flat"`` otherwise; with ``undo_sweep`` the f^2 is divided out first. ``ringdown`` refines each
-    mode with the EKF on the recording's samples (``modes.ring_down``).
+    The spectrum judged is Klipper's (``spectra.klipper_psd``) for a recording, the file's own for a
+    Klipper spectrum file; the modes are seen in it and fitted on a finer one (``spectra.spectrum``
+    at ``resolution`` Hz, 0.1 by default) where there are samples, with their spectrogram telling a
+    steady tone from a resonance. ``excitation`` defaults to ``"sweep"`` for Klipper's files (its
+    ``TEST_RESONANCES`` sweep) and ``"flat"`` otherwise; with ``undo_sweep`` the f^2 is divided out of
+    the spectrum handed on. ``ringdown`` refines each mode with the EKF on the recording's samples
+    (``modes.ring_down``).
     """
+    from dataclasses import replace
+
     from shapefmu.identification import recordings, spectra
 
     read = read_recording(path, time_column=time_column, fs=fs, columns=columns)
@@ -53,22 +59,19 @@ def identify(path, *, axis="xyz", time_column=None, fs=None, columns=None, undo_
         key = axis if isinstance(axis, str) else None
         if key not in read:
             raise ValueError(f"{path}: no spectrum for axis {axis!r}; it has {', '.join(read)}")
-        recording, found = None, read[key]
+        recording, judged, fine, gram = None, read[key], None, None
         kind = recordings.KLIPPER_SPECTRUM
     else:
         recording = read
         options = {} if resolution is None else {"resolution": resolution}
-        found = spectra.spectrum(recording, axis, **options)
+        judged = spectra.klipper_psd(recording, axis)
+        fine = spectra.spectrum(recording, axis, **options)
+        gram = spectra.spectrogram(recording, axis)
         kind = recording.format
-    if undo_sweep:
-        found = undo_sweep_excitation(found)
     if excitation is None:
         excitation = "sweep" if kind in (recordings.KLIPPER_RAW, recordings.KLIPPER_SPECTRUM) else "flat"
-    modes = find_modes(found, response=response, excitation=excitation, f_min=f_min, f_max=f_max,
-                       prominence=prominence)
+    modes = find_modes(judged, excitation=excitation, f_min=f_min, f_max=f_max, fine=fine, spectrogram=gram)
     if ringdown and modes.modes:
-        from dataclasses import replace
-
         samples = spectra.axis_samples(recording, axis) if axis != "xyz" else next(iter(recording.channels.values()))
         modes = replace(modes, modes=ring_down(samples, recording.fs, modes))
-    return Identified(recording, found, modes)
+    return Identified(recording, undo_sweep_excitation(judged) if undo_sweep else judged, modes)
