@@ -66,12 +66,12 @@ FIT_FLOOR = 0.15  # a mode is fitted down to this share of its peak: about 2.4 h
 TOP_FLOOR = 0.4  # ... and checked on its top alone, down to this share: about 1.2 half-power widths
 MAX_HALF_SPAN = 400  # bins each way: bounds the work of one fit
 MAX_FIT_BINS = 240  # a wider band is fitted on every k-th bin
-SHAPES = ((False, False), (True, False), (True, True))
+SHAPES = ((False, False), (True, False), (True, True))  # (asymmetric residues, tilted background)
 RESOLVED_BINS = 4  # a peak narrower than this (half-width, in bins) is fitted alone, by its top
 TRUSTED_MISFIT = 0.02  # a joint fit missing the spectrum by more (rms) places no pole away from the top seen
-ON_TOP = 1 / 3  # a pole a third of its half-width off a top, where a peak is 10 % below it, is not that peak  # (asymmetric residues, tilted background)
-OUTLIER_SPREADS = 5.0
-KERNEL_STEPS = 4  # the window's smearing sampled every quarter bin  # a bin this many robust standard deviations off the fit is an outlier
+ON_TOP = 1.0  # a pole its half-width off a top, where a peak is at half its height, is not that peak
+OUTLIER_SPREADS = 5.0  # a bin this many robust standard deviations off the fit is an outlier
+KERNEL_STEPS = 4  # the window's smearing sampled every quarter bin
 Z90 = 1.6448536269514722  # the standard normal's 95th percentile: a two-sided 90 % interval
 
 
@@ -319,8 +319,8 @@ def _fit_modes(spectrum: Spectrum, excitation: str, peaks: list[tuple[float, flo
     joint = _resolved_modes(spectrum, response, [members[k] for k in resolved]) if resolved else []
     modes = {}
     for k, mode in zip(resolved, joint):
-        # a pole where the peak it stands for is 10 % below its top (a third of its half-width off
-        # it), or half a bin of the plotted spectrum off, is not the peak seen
+        # a pole outside the half-power band of the peak it stands for (its half-width off the top,
+        # or half a bin of the plotted spectrum) is not the peak seen
         if mode is not None and abs(mode.damped_frequency - peaks[k][0]) < max(ON_TOP * mode.zeta * mode.frequency,
                                                                                 seen_step / 2):
             modes[k] = mode

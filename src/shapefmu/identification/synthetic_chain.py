@@ -332,7 +332,7 @@ def record(chain: Chain, *, test: KlipperTest = KlipperTest(), sensor: Accelerom
         phase = rng.uniform(0, 2 * math.pi)
         xyz[:, i] += disturbances.drift * np.sin(2 * math.pi * instants / (3 * duration) + phase)
     lsb = sensor.sensitivity * 1e-3 * G
-    counts = np.clip(sensor.step * np.round(xyz / (lsb * sensor.step)), -sensor.counts, sensor.counts - 1)
+    counts = np.clip(sensor.step * np.round(xyz / (lsb * sensor.step)), -sensor.counts, sensor.counts - sensor.step)
     values = counts * sensor.klipper_scale * 1e-3 * G
     # Klipper's timestamps: its clock regression, off by a slowly changing few microseconds, printed to 1 us
     batches = np.arange(count) // max(int(0.1 * sensor.rate), 1)
