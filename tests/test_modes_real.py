@@ -93,3 +93,12 @@ def test_each_mode_has_a_damping_interval_around_it(found, name):
     for mode in found[name]:
         low, high = mode.zeta_interval
         assert 0 < low <= mode.zeta <= high <= 1 and math.isfinite(mode.frequency_sd)
+
+
+@pytest.mark.parametrize("module", ["recordings", "spectra", "poles", "modes", "synthetic_chain"])
+def test_the_docstring_examples_run(module):
+    import doctest
+    import importlib
+
+    result = doctest.testmod(importlib.import_module(f"shapefmu.identification.{module}"))
+    assert result.attempted > 0 and result.failed == 0

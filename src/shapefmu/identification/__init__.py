@@ -5,11 +5,14 @@
     advice = ident.recommend([found.spectrum], found.modes.modes)  # a Recommendation: table, pick, baseline
 
 - ``recordings``: Klipper raw and processed files, RepRapFirmware M956, any CSV/Parquet table;
-- ``spectra``: Welch spectra with their settings, axes combined, Klipper's sweep excitation undone;
-- ``modes``: resonances with frequency, damping and uncertainty (spectrum fit; EKF on a ring-down);
+- ``spectra``: Klipper's own spectrum and normalisation, finer Welch spectra, spectrograms;
+- ``modes``: the resonances a person sees, with frequency, damping and its 90 % interval; no mode in
+  noise, no tone taken for one (EKF on a ring-down);
+- ``poles``: the local pole form of a linear system's response, fitted to a spectrum;
 - ``metrics``: Klipper's remaining vibration, smoothing and max acceleration, derived and vectorised;
 - ``recommend``: every family of the design layer at its best frequencies, the pick and the baseline;
-- ``synthetic``: recordings of known machines, made as Klipper and RepRapFirmware make them.
+- ``synthetic``: recordings of known machines, made as Klipper and RepRapFirmware make them;
+- ``synthetic_chain``: raw Klipper tests of mass-spring-damper chains the fitter knows nothing about.
 """
 
 from __future__ import annotations
@@ -47,6 +50,17 @@ def identify(path, *, axis="xyz", time_column=None, fs=None, columns=None, undo_
     ``TEST_RESONANCES`` sweep) and ``"flat"`` otherwise; with ``undo_sweep`` the f^2 is divided out of
     the spectrum handed on. ``ringdown`` refines each mode with the EKF on the recording's samples
     (``modes.ring_down``).
+
+    >>> import pathlib, tempfile
+    >>> import numpy as np
+    >>> f = np.arange(0.0, 200.0, 1.5625)                             # Klipper's bins at 3.2 kHz
+    >>> psd = 1e4 * f**2 / ((f**2 - 45.0**2) ** 2 + (0.1 * 45.0 * f) ** 2)  # a 45 Hz peak, zeta 0.05
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "resonances_x.csv"
+    >>> rows = "".join(f"{a:.1f},{b:.3e},0,0,{b:.3e}\\n" for a, b in zip(f, psd))
+    >>> _ = path.write_text("freq,psd_x,psd_y,psd_z,psd_xyz\\n" + rows)
+    >>> found = identify(path, axis="x")
+    >>> [f"{m.damped_frequency:.1f} Hz" for m in found.modes.modes], found.recording is None
+    (['45.0 Hz'], True)
     """
     from dataclasses import replace
 

@@ -20,22 +20,23 @@ sure we are of them.
    a resonance only while it passes it (and its thirds and fifths); a fan or a motor hums all the
    time. A peak whose power, over time, has a median above ``STEADY`` of its mean (most of it is
    there all the time) is a tone.
-4. Each mode's frequency and damping: a least-squares fit, in log, of the machine's |H(f)|^2 around
-   the peak (the bins around it down to ``FIT_FLOOR`` of its top, so about 2.4 half-power widths each
-   side and never past the cliff where a sweep ends; overlapping neighbours together) by
-   the local form every linear system has near its poles (partial fractions; see Ewins, Modal
-   Testing, 2nd ed., 4.3):
-
-       H(f) = sum_k [ R_k / (j f - p_k) + conj(R_k) / (j f - conj(p_k)) ] + B,   p_k = -sigma_k + j f_k,
-
-   residues R_k and background B complex and free (what the other modes and the base contribute
-   nearby), smeared by the spectrum's window (``spectra.spectral_kernel``) as Welch's method smears
-   it. The pole gives the mode: natural frequency |p_k| and damping ratio sigma_k / |p_k| (the
-   eigenvalue definition, for any damping, proportional or not). A fit to the peak's shape and not
-   only to its top is what keeps a 0.2-damped mode within 1 %: its peak sits 2-4 % off f_n.
-5. How sure: the fit's covariance sigma^2 (J^T J)^-1, sigma^2 the residuals' variance, inflated by
-   their correlation length (neighbouring bins are not independent, and a misfit spans many), gives
-   the standard errors; the damping's 90 % interval is zeta * exp(+-1.645 sd(log zeta)).
+4. Each mode's frequency and damping: the local pole form every linear system has (``poles``) fitted
+   to the machine's |H(f)|^2 around the peaks (the bins down to ``FIT_FLOOR`` of each top, about
+   2.4 half-power widths each side, never past the cliff where a sweep ends). The pole p = -sigma +
+   j f_d gives the mode: natural frequency |p| and damping ratio sigma / |p| (the eigenvalue
+   definition, for any damping, proportional or not); a fit to the peak's shape and not only to its
+   top is what keeps a 0.2-damped mode within 1 %: its peak sits 2-4 % off f_n.
+   Where the spectrum resolves the peaks (half-widths of ``RESOLVED_BINS`` bins or more: a recording
+   fitted at 0.1 Hz), all of them are fitted together, and a pole is kept if the form fits the
+   spectrum within ``TRUSTED_MISFIT`` and the pole lies within its peak's half-power band. Otherwise
+   (a Klipper spectrum file: 1.5 Hz bins hardly resolve a printer's peak, and its shape is not a
+   clean pole's) each peak is read where it is seen: its damped frequency the top of the plotted
+   spectrum (the vertex of the parabola through the log of its three highest bins), its damping
+   that of one pole fitted alone to the bins around the top, as many on each side and no further
+   than halfway to the neighbouring peaks; the half-power width alone if too few bins remain.
+5. How sure: the fit's standard errors (``poles``), and, as the model's own error, how far the same
+   fit moves on the peaks' tops alone (down to ``TOP_FLOOR``) and with the other background; the
+   damping's 90 % interval is zeta * exp(+-1.645 sd(log zeta)), at most 1.
 
 On a ring-down (``ring_down``) each mode is refined by the EKF of paper 001 on the signal band-passed
 around it (``shapefmu.estimation.estimate_mode``) and checked by the log decrement.
@@ -48,11 +49,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.ndimage import uniform_filter1d
-from scipy.optimize import least_squares
 from scipy.signal import find_peaks
 
-from shapefmu.identification.spectra import (KLIPPER_MAX_FREQ, Spectrogram, Spectrum, klipper_normalised,
-                                             spectral_kernel)
+from shapefmu.identification.poles import fit_poles
+from shapefmu.identification.spectra import KLIPPER_MAX_FREQ, Spectrogram, Spectrum, klipper_normalised
 
 # The slope p of the excitation's spectrum: Klipper's sweep puts in energy growing as f^2 (spectra),
 # a tap, a ring-down or a white-noise shaker a flat spectrum.
@@ -70,8 +70,6 @@ SHAPES = ((False, False), (True, False), (True, True))  # (asymmetric residues, 
 RESOLVED_BINS = 4  # a peak narrower than this (half-width, in bins) is fitted alone, by its top
 TRUSTED_MISFIT = 0.02  # a joint fit missing the spectrum by more (rms) places no pole away from the top seen
 ON_TOP = 1.0  # a pole its half-width off a top, where a peak is at half its height, is not that peak
-OUTLIER_SPREADS = 5.0  # a bin this many robust standard deviations off the fit is an outlier
-KERNEL_STEPS = 4  # the window's smearing sampled every quarter bin
 Z90 = 1.6448536269514722  # the standard normal's 95th percentile: a two-sided 90 % interval
 
 
@@ -297,9 +295,7 @@ def _region(values: np.ndarray, i: int, share: float) -> tuple[int, int]:
 
 
 def _fit_modes(spectrum: Spectrum, excitation: str, peaks: list[tuple[float, float]], seen_step: float) -> list[Mode]:
-    """Every peak's mode (module docstring, 4-5): the peaks the spectrum resolves (``RESOLVED_BINS``)
-    all together; each of the others, and each whose pole the joint fit put off its top, alone where
-    it is seen."""
+    """Every peak's mode (module docstring, 4-5) from the peaks seen, (top, height)."""
     freq = spectrum.freq
     step = freq[1] - freq[0]
     response = machine_response(spectrum, excitation)
@@ -360,12 +356,13 @@ def _resolved_modes(spectrum: Spectrum, response: np.ndarray, members) -> list[M
     ``TRUSTED_MISFIT``: a spectrum the form does not describe is read peak by peak."""
     whole = np.unique(np.concatenate([_bins(response, i, FIT_FLOOR) for i, _, _, _ in members]))
     tops = np.unique(np.concatenate([_bins(response, i, TOP_FLOOR) for i, _, _, _ in members]))
-    main = _fit(spectrum, response, whole, members, SHAPES)
+    starts = [(i, width) for i, width, _, _ in members]
+    main = fit_poles(spectrum, response, whole, starts, SHAPES)
     if main is None or main.misfit > TRUSTED_MISFIT:
         return [None] * len(members)
     other_background = (main.form.asymmetric, not main.form.tilted)
-    checks = [check for check in (_fit(spectrum, response, tops, members, [main.shape()], main),
-                                  _fit(spectrum, response, whole, members, [other_background], main))
+    checks = [check for check in (fit_poles(spectrum, response, tops, starts, [main.shape()], main),
+                                  fit_poles(spectrum, response, whole, starts, [other_background], main))
               if check is not None]
     modes = []
     for k, (_, _, seen_at, height) in enumerate(members):
@@ -392,208 +389,17 @@ def _unresolved_mode(spectrum: Spectrum, view: np.ndarray, top: tuple[float, int
     peaks), checked on the top alone."""
     freq = spectrum.freq
     frequency, i = top
-    member = (i, _half_width(freq, view, i, walls), at, height)
+    start = [(i, _half_width(freq, view, i, walls))]
     fixed = {0: math.log(frequency)}
-    main = _fit(spectrum, view, _bins(view, i, FIT_FLOOR, walls), [member], [(False, False)], fixed=fixed)
+    main = fit_poles(spectrum, view, _bins(view, i, FIT_FLOOR, walls), start, [(False, False)], fixed=fixed)
     if main is None:
-        return _half_power_mode(frequency, member[1], at, height)
-    check = _fit(spectrum, view, _bins(view, i, TOP_FLOOR, walls), [member], [(False, False)], main, fixed)
+        return _half_power_mode(frequency, start[0][1], at, height)
+    check = fit_poles(spectrum, view, _bins(view, i, TOP_FLOOR, walls), start, [(False, False)], main, fixed)
     natural, zeta, _, sd_log_z = main.mode(0)
     if check is not None:
         sd_log_z = math.hypot(sd_log_z, math.log(check.mode(0)[1] / zeta))
     # the top is known to within its bin: a uniform error of one bin's width
     return _mode(natural, zeta, (freq[1] - freq[0]) / math.sqrt(12), sd_log_z, height, at)
-
-
-class _PoleForm:
-    """The local form of module docstring 4 for ``count`` poles on the frequencies ``grid`` (bins x
-    kernel offsets) smeared by ``weights``; ``asymmetric`` lets the residues be complex (else real: a
-    peak nearly symmetric about its pole). The background B is real: near a pole only the phase of
-    the residue relative to B shows in |H|^2, so a phase of B would be a direction the fit cannot
-    tell apart. Parameters per pole: log f_k, log sigma_k, Re R_k / sigma_k (and Im R_k / sigma_k),
-    then B."""
-
-    def __init__(self, grid: np.ndarray, weights: np.ndarray, count: int, asymmetric: bool, tilted: bool = False):
-        self.grid, self.weights, self.count, self.asymmetric, self.tilted = grid, weights, count, asymmetric, tilted
-        self.per_pole = 4 if asymmetric else 3
-        self.reference = float(np.mean(grid))
-
-    def size(self) -> int:
-        return self.per_pole * self.count + (3 if self.tilted else 1)
-
-    def pole(self, params, k) -> tuple[float, float]:
-        """(f_k, sigma_k) of pole ``k``."""
-        return math.exp(params[self.per_pole * k]), math.exp(params[self.per_pole * k + 1])
-
-    def evaluate(self, params) -> tuple[np.ndarray, np.ndarray]:
-        """(the smeared |H|^2 at each bin, its derivatives in the parameters: bins x parameters)."""
-        jf = 1j * self.grid
-        n = self.per_pole
-        base = self.per_pole * self.count
-        total = np.full(self.grid.shape, complex(params[base], 0.0))
-        if self.tilted:
-            tilt = self.grid / self.reference - 1
-            total = total + complex(params[base + 1], params[base + 2]) * tilt
-        parts = []
-        for k in range(self.count):
-            fk, sk = self.pole(params, k)
-            shape = complex(params[n * k + 2], params[n * k + 3] if self.asymmetric else 0.0)
-            residue = sk * shape
-            pole = complex(-sk, fk)
-            upper, lower = 1 / (jf - pole), 1 / (jf - pole.conjugate())
-            total += residue * upper + residue.conjugate() * lower
-            # d/d log f_k: f_k (j R upper^2 - j conj(R) lower^2); d/d log sigma_k: the residue scales with
-            # sigma_k and the pole moves by -sigma_k
-            d_f = fk * 1j * (residue * upper**2 - residue.conjugate() * lower**2)
-            d_s = residue * upper + residue.conjugate() * lower - sk * (residue * upper**2 + residue.conjugate() * lower**2)
-            d_a = sk * (upper + lower)
-            parts += [d_f, d_s, d_a] + ([1j * sk * (upper - lower)] if self.asymmetric else [])
-        parts.append(np.ones(self.grid.shape, dtype=complex))
-        if self.tilted:
-            parts += [tilt.astype(complex), 1j * tilt]
-        model = (np.abs(total) ** 2) @ self.weights
-        slopes = (2 * (np.conj(total)[None] * np.array(parts)).real) @ self.weights
-        return model, slopes.T
-
-
-@dataclass(frozen=True)
-class _Fitted:
-    form: _PoleForm
-    params: np.ndarray
-    covariance: np.ndarray
-    misfit: float  # the residuals' root mean square, in log: 0.01 is a fit within 1 %
-
-    def shape(self) -> tuple[bool, bool]:
-        return self.form.asymmetric, self.form.tilted
-
-    def mode(self, k: int) -> tuple[float, float, float, float]:
-        """(natural frequency, zeta, sd of log f_n, sd of log zeta) of pole ``k``."""
-        fk, sk = self.form.pole(self.params, k)
-        natural = math.hypot(fk, sk)
-        zeta = sk / natural
-        at = self.form.per_pole * k
-        block = self.covariance[at:at + 2, at:at + 2]  # of (log f_k, log sigma_k)
-        # log f_n = log f_k + 1/2 log(1 + (s/f)^2) and log zeta = log s - log f_n: their gradients in
-        # (log f_k, log sigma_k) are (1 - zeta^2, zeta^2) and (-(1 - zeta^2), 1 - zeta^2)
-        along_f, along_z = np.array([1 - zeta**2, zeta**2]), np.array([zeta**2 - 1, 1 - zeta**2])
-        return (natural, zeta, math.sqrt(max(along_f @ block @ along_f, 0.0)),
-                math.sqrt(max(along_z @ block @ along_z, 0.0)))
-
-
-def _fit(spectrum: Spectrum, response: np.ndarray, index: np.ndarray, members, shapes,
-         start: _Fitted | None = None, fixed: dict[int, float] | None = None) -> _Fitted | None:
-    """The pole form fitted to ``response`` at the bins ``index`` (module docstring, 4) in each of
-    ``shapes`` ((asymmetric, tilted) pairs), from the peaks' half-power estimates or from ``start``'s
-    poles, the parameters in ``fixed`` (index: value) held; the best by Akaike's criterion, refitted
-    once without the bins far off it (a line of the sweep's slow to-and-fro, a tone). None if no fit
-    holds."""
-    freq = spectrum.freq
-    f = freq[index]
-    y = np.log(np.maximum(response[index] / float(response[index].max()), 1e-300))
-    offsets, weights = spectral_kernel(spectrum.window, KERNEL_STEPS)
-    grid = f[:, None] + offsets[None, :] * (freq[1] - freq[0])
-    fits = []
-    for asymmetric, tilted in shapes:
-        form = _PoleForm(grid, weights, len(members), asymmetric, tilted)
-        first, lower, upper = [], [], []
-        for k, (i, width, _, _) in enumerate(members):
-            guess = [math.log(freq[i]), math.log(width), math.sqrt(max(float(response[i] / response[index].max()), 1e-12)), 0.0]
-            if start is not None:
-                guess = list(start.params[start.form.per_pole * k:start.form.per_pole * (k + 1)]) + [0.0]
-            first += guess[:form.per_pole]
-            lower += [math.log(0.8 * freq[i]), math.log(1e-4 * freq[i])] + [-np.inf] * (form.per_pole - 2)
-            upper += [math.log(1.25 * freq[i]), math.log(0.7 * freq[i])] + [np.inf] * (form.per_pole - 2)
-        background = [0.0] if start is None else [start.params[start.form.per_pole * start.form.count]]
-        first += (background + [0.0, 0.0])[:form.size() - len(first)]
-        lower += [-np.inf] * (form.size() - len(lower))
-        upper += [np.inf] * (form.size() - len(upper))
-        free = np.ones(form.size(), dtype=bool)
-        for at, value in (fixed or {}).items():
-            first[at], free[at] = value, False
-        fit = _least_squares(form, y, np.array(first), np.array(lower), np.array(upper), free)
-        if fit is not None:
-            fits.append((form, fit, np.array(lower), np.array(upper), free))
-    if not fits:
-        return None
-    form, fit, lower, upper, free = min(fits, key=lambda item: _information(item[1], f.size))
-    spread = 1.4826 * float(np.median(np.abs(fit.fun - np.median(fit.fun))))
-    outlying = np.abs(fit.fun - np.median(fit.fun)) > OUTLIER_SPREADS * spread
-    if spread > 0 and outlying.any() and np.count_nonzero(~outlying) > 2 * fit.x.size:
-        kept = _PoleForm(grid[~outlying], weights, len(members), form.asymmetric, form.tilted)
-        refit = _least_squares(kept, y[~outlying], fit.params, lower, upper, free)
-        if refit is not None:
-            form, fit, f = kept, refit, f[~outlying]
-    covariance = np.zeros((free.size, free.size))
-    covariance[np.ix_(free, free)] = _covariance(fit, f.size)
-    return _Fitted(form, fit.params, covariance, float(np.sqrt(np.mean(fit.fun**2))))
-
-
-def _least_squares(form: _PoleForm, y: np.ndarray, start, lower, upper, free):
-    """The fit of ``form`` to the log response ``y`` from ``start``, the parameters not ``free`` held
-    (Levenberg-Marquardt with the analytic Jacobian), or None if it failed or left the bounds (a pole
-    off its peak). The result's ``params`` holds every parameter, ``x`` and ``jac`` the free ones."""
-    if y.size <= np.count_nonzero(free):
-        return None
-    params = np.array(start, dtype=float)
-    last = {}
-
-    def whole(values):
-        params[free] = values
-        return params
-
-    def evaluate(values):  # the residual and the Jacobian are asked for at the same point: once
-        key = values.tobytes()
-        if key not in last:
-            last.clear()
-            last[key] = form.evaluate(whole(values))
-        return last[key]
-
-    def residual(values):
-        return np.log(np.maximum(evaluate(values)[0], 1e-300)) - y
-
-    def jacobian(values):
-        model, slopes = evaluate(values)
-        return slopes[:, free] / np.maximum(model, 1e-300)[:, None]
-
-    try:
-        fit = least_squares(residual, params[free], jac=jacobian, method="lm", x_scale="jac", ftol=1e-6, xtol=1e-6,
-                            max_nfev=100 * int(np.count_nonzero(free)))
-    except (ValueError, np.linalg.LinAlgError):
-        return None
-    fit.params = whole(fit.x).copy()
-    # status 0, out of evaluations, is kept: an exact form creeps towards a zero residual
-    if fit.status < 0 or not np.all(np.isfinite(fit.params)) or np.any(fit.params < lower) or np.any(fit.params > upper):
-        return None
-    return fit
-
-
-def _correlation_length(residual: np.ndarray) -> float:
-    """1 + 2 sum of the residuals' autocorrelation over the lags before it first turns negative: how
-    many bins count as one independent one."""
-    centred = residual - residual.mean()
-    energy = float(centred @ centred)
-    length = 1.0
-    if energy > 0:
-        for lag in range(1, residual.size // 2):
-            rho = float(centred[lag:] @ centred[:-lag]) / energy
-            if rho <= 0:
-                break
-            length += 2 * rho
-    return min(length, residual.size / 4)
-
-
-def _information(fit, bins: int) -> float:
-    """Akaike's criterion on the independent bins (bins over the residuals' correlation length):
-    the simpler form unless the other one fits clearly better."""
-    independent = bins / _correlation_length(fit.fun)
-    return independent * math.log(max(float(fit.fun @ fit.fun) / bins, 1e-300)) + 2 * fit.x.size
-
-
-def _covariance(fit, bins: int) -> np.ndarray:
-    """sigma^2 (J^T J)^-1 of the free parameters, with sigma^2 the residuals' variance times their
-    correlation length."""
-    variance = float(fit.fun @ fit.fun) / max(bins - fit.x.size, 1)
-    return np.linalg.pinv(fit.jac.T @ fit.jac) * variance * _correlation_length(fit.fun)
 
 
 def _half_power_mode(top: float, width: float, seen_at: float, height: float) -> Mode:

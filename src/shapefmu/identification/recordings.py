@@ -93,7 +93,13 @@ class Recording:
 
 def read_bytes(path) -> bytes:
     """The content of a recording: refused in one line if it is not a regular file or is larger than
-    ``MAX_RECORDING_BYTES``."""
+    ``MAX_RECORDING_BYTES``.
+
+    >>> read_bytes("/")
+    Traceback (most recent call last):
+    ...
+    ValueError: /: a recording must be a regular file, not a folder
+    """
     name = os.fspath(path)
     try:  # without blocking: a FIFO with no writer would wait in open() forever
         with open(os.open(name, os.O_RDONLY | os.O_NONBLOCK), "rb") as stream:
@@ -112,7 +118,11 @@ def read_bytes(path) -> bytes:
 
 
 def detect(data: bytes) -> str:
-    """The format of a recording's content (see the module docstring), or ``TABLE``."""
+    """The format of a recording's content (see the module docstring), or ``TABLE``.
+
+    >>> detect(b"#time,accel_x,accel_y,accel_z\\n"), detect(b"Sample,X,Y\\n"), detect(b"t,a\\n")
+    ('klipper-raw', 'rrf-m956', 'table')
+    """
     if data[:4] == b"PAR1":
         return TABLE
     first = data.split(b"\n", 1)[0].strip().lower().replace(b" ", b"")

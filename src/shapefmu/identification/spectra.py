@@ -260,7 +260,13 @@ def spectrogram(recording: Recording, axis="xyz", seconds: float = 0.5) -> Spect
 
 def undo_sweep_excitation(spectrum: Spectrum) -> Spectrum:
     """``spectrum`` divided by f^2: the machine's response per unit of the sweep's acceleration per
-    hertz, squared (see the module docstring)."""
+    hertz, squared (see the module docstring). A normalised spectrum is multiplied back by f + 0.1
+    first (below 10 Hz Klipper's taper stays).
+
+    >>> import numpy as np
+    >>> undo_sweep_excitation(Spectrum("s", "x", np.array([10.0, 20.0]), np.array([100.0, 400.0]), "")).psd.tolist()
+    [1.0, 1.0]
+    """
     if spectrum.sweep_undone:
         return spectrum
     psd = spectrum.psd * (spectrum.freq + 0.1) if spectrum.normalised else spectrum.psd

@@ -101,7 +101,11 @@ class Chain:
     def random(cls, seed: int, *, band=(20.0, 120.0), zetas=(0.02, 0.2), separation=1.15) -> "Chain":
         """A chain of two or three masses (in series or branched, a part sometimes tied to the base
         too), dampers drawn apart from the springs, redrawn until every mode lies in ``band`` (Hz)
-        with damping in ``zetas`` and neighbouring modes are at least ``separation`` apart."""
+        with damping in ``zetas`` and neighbouring modes are at least ``separation`` apart.
+
+        >>> [f"{m.frequency:.1f} Hz, zeta {m.zeta:.3f}" for m in Chain.random(0).modes()]
+        ['41.4 Hz, zeta 0.057', '65.0 Hz, zeta 0.170']
+        """
         rng = np.random.default_rng(seed)
         for _ in range(10000):
             n = int(rng.integers(2, 4))
@@ -128,7 +132,11 @@ class Chain:
         raise ValueError(f"no chain found with modes in {band} Hz and damping in {zetas}")
 
     def matrices(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(M, C, K) in coordinates relative to the base: M z'' + C z' + K z = -M 1 a_base."""
+        """(M, C, K) in coordinates relative to the base: M z'' + C z' + K z = -M 1 a_base.
+
+        >>> Chain((1.0, 2.0), (Link(0, BASE, 10.0, 1.0), Link(1, 0, 5.0, 0.5))).matrices()[2].tolist()
+        [[15.0, -5.0], [-5.0, 5.0]]
+        """
         n = len(self.masses)
         stiffness, damping = np.zeros((n, n)), np.zeros((n, n))
         for link in self.links:
@@ -142,7 +150,12 @@ class Chain:
 
     def state_space(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(A, B, C): state [z, z'], input the base acceleration, output the sensor mass's absolute
-        acceleration z'' + a_base (the -1 of B and the +1 of the base cancel: no feed-through)."""
+        acceleration z'' + a_base (the -1 of B and the +1 of the base cancel: no feed-through).
+
+        >>> a, b, c = Chain((2.0,), (Link(0, BASE, 8.0, 1.0),)).state_space()
+        >>> a.tolist(), b.tolist(), c.tolist()
+        ([[0.0, 1.0], [-4.0, -0.5]], [0.0, -1.0], [-4.0, -0.5])
+        """
         mass, damping, stiffness = self.matrices()
         n = len(self.masses)
         inverse = np.linalg.inv(mass)
@@ -151,10 +164,14 @@ class Chain:
         return a, b, a[n + self.sensor].copy()
 
     def modes(self) -> tuple[ChainMode, ...]:
-        """The underdamped modes, lowest first, from the eigenvalues of the state matrix."""
+        """The underdamped modes, lowest first, from the eigenvalues of the state matrix.
+
+        >>> [(round(m.frequency, 4), round(m.zeta, 4)) for m in Chain((1.0,), (Link(0, BASE, 400.0, 4.0),)).modes()]
+        [(3.1831, 0.1)]
+        """
         values = np.linalg.eigvals(self.state_space()[0])
         pairs = [v for v in values if v.imag > 0]
-        return tuple(sorted((ChainMode(abs(v) / (2 * math.pi), -v.real / abs(v)) for v in pairs),
+        return tuple(sorted((ChainMode(float(abs(v) / (2 * math.pi)), float(-v.real / abs(v))) for v in pairs),
                             key=lambda m: m.frequency))
 
 
@@ -170,7 +187,12 @@ class KlipperTest:
     sweeping_period: float = 1.2
 
     def segments(self) -> tuple[np.ndarray, np.ndarray]:
-        """(end times in s, commanded acceleration in mm/s^2 until each end) from t = 0."""
+        """(end times in s, commanded acceleration in mm/s^2 until each end) from t = 0.
+
+        >>> ends, accels = KlipperTest().segments()
+        >>> [round(float(e), 4) for e in ends[:3]], accels[:3].tolist()
+        ([0.05, 0.1, 0.149], [700.0, 100.0, 94.0])
+        """
         ends, accels = [], []
         time, freq, sign = 0.0, self.freq_start, 1.0
         while freq <= self.freq_end + 1e-6:
@@ -198,6 +220,11 @@ class KlipperTest:
 
     @property
     def duration(self) -> float:
+        """The test's length, s.
+
+        >>> round(KlipperTest(hz_per_sec=2.0).duration, 3)
+        65.002
+        """
         return float(self.segments()[0][-1])
 
 
@@ -219,7 +246,11 @@ class Accelerometer:
 
     @property
     def full_scale(self) -> float:
-        """The largest acceleration it reports before clipping, mm/s^2."""
+        """The largest acceleration it reports before clipping, mm/s^2.
+
+        >>> round(ADXL345.full_scale / G, 2)
+        15.97
+        """
         return self.counts * self.sensitivity * 1e-3 * G
 
 
@@ -266,7 +297,13 @@ def _base_acceleration(test: KlipperTest, t: np.ndarray) -> np.ndarray:
 def respond(chain: Chain, dt: float, base: np.ndarray) -> np.ndarray:
     """The sensor mass's acceleration for the base acceleration ``base`` held over steps of ``dt``:
     the state space discretised exactly for a held input (matrix exponential), run in the
-    eigenvector coordinates of the discrete system (one first-order recursion per eigenvalue)."""
+    eigenvector coordinates of the discrete system (one first-order recursion per eigenvalue).
+
+    >>> import numpy as np
+    >>> step = respond(Chain((1.0,), (Link(0, BASE, 400.0, 4.0),)), 1e-3, np.ones(20000))
+    >>> round(float(step[-1]), 6), round(float(step.max()), 3)               # settles at 1, overshoots
+    (1.0, 1.744)
+    """
     a, b, c = chain.state_space()
     n = a.shape[0]
     augmented = np.zeros((n + 1, n + 1))
@@ -296,7 +333,12 @@ def record(chain: Chain, *, test: KlipperTest = KlipperTest(), sensor: Accelerom
            disturbances: Disturbances = Disturbances(), axis: str = "x", oversample: int = 8, seed: int = 0,
            start: float = 2345.678) -> tuple[np.ndarray, np.ndarray]:
     """(timestamps in s, (N, 3) accelerations x, y, z in mm/s^2) of Klipper's resonance test of
-    ``axis`` on ``chain``, as Klipper's raw CSV holds them (module docstring)."""
+    ``axis`` on ``chain``, as Klipper's raw CSV holds them (module docstring).
+
+    >>> t, xyz = record(Chain.random(0), test=KlipperTest(freq_start=30.0, freq_end=50.0, hz_per_sec=2.0))
+    >>> xyz.shape, round(float(t[1] - t[0]), 6), round(float(np.median(xyz[:, 2]) / G), 2)
+    ((34353, 3), 0.000312, 0.97)
+    """
     if axis not in ("x", "y"):
         raise ValueError(f"axis must be 'x' or 'y' (the chain moves in one horizontal direction), got {axis!r}")
     if not 2 <= oversample <= 64:
@@ -342,6 +384,13 @@ def record(chain: Chain, *, test: KlipperTest = KlipperTest(), sensor: Accelerom
 
 
 def write_klipper_raw(path, t, xyz) -> None:
-    """Klipper's raw CSV (``#time,accel_x,accel_y,accel_z``, every number with six decimals)."""
+    """Klipper's raw CSV (``#time,accel_x,accel_y,accel_z``, every number with six decimals).
+
+    >>> import pathlib, tempfile
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "raw_data_x.csv"
+    >>> write_klipper_raw(path, np.array([1.0, 1.0003]), np.array([[1.5, 0.0, 9806.65], [-1.5, 0.0, 9806.65]]))
+    >>> path.read_text().splitlines()[:2]
+    ['#time,accel_x,accel_y,accel_z', '1.000000,1.500000,0.000000,9806.650000']
+    """
     np.savetxt(path, np.column_stack([t, xyz]), fmt="%.6f", delimiter=",", header="time,accel_x,accel_y,accel_z",
                comments="#")
