@@ -161,3 +161,13 @@ def test_strong_fan_tones_are_told_from_resonances(tmp_path):
     found = identify(path, axis="x").modes
     assert [round(m.frequency) for m in found.modes] == [round(m.frequency) for m in clearly_seen(chain)]
     assert sum("steady tone" in note for note in found.notes) == 2, found.notes
+
+
+def test_the_accelerometer_at_rest_gives_no_mode(tmp_path):
+    """White and 1/f noise, drift, quantisation and the two fan tones, the machine not moved (a
+    test with a billionth of Klipper's acceleration): no resonance, and the output says so."""
+    still = sc.KlipperTest(accel_per_hz=1e-9, sweeping_accel=1e-9)
+    path = tmp_path / "raw_data_x.csv"
+    sc.write_klipper_raw(path, *sc.record(sc.Chain.random(0), test=still, seed=5))
+    found = identify(path, axis="x").modes
+    assert found.modes == () and "no resonance" in found.notes[-1], found.notes
