@@ -48,7 +48,6 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.ndimage import uniform_filter1d
 from scipy.signal import find_peaks
 
 from shapefmu.identification.poles import fit_poles
@@ -233,7 +232,9 @@ def find_modes(spectrum: Spectrum, *, excitation: str = "sweep", f_min: float | 
                                      f"resonance must rise {NOISE_SIGMAS:g} times that)")
     # a finer spectrum than Klipper's is looked at as Klipper plots one: averaged over its resolution
     seen_step = max(float(freq[1] - freq[0]), SEEN_RESOLUTION)
-    seen = uniform_filter1d(seen, int(round(seen_step / (freq[1] - freq[0]))), mode="nearest")
+    width = int(round(seen_step / (freq[1] - freq[0])))
+    if width > 1:  # a moving average, the edges repeated
+        seen = np.convolve(np.pad(seen, (width // 2, (width - 1) // 2), mode="edge"), np.ones(width) / width, "valid")
     top = float(seen.max())
     peaks, props = find_peaks(seen, height=min_share * top, prominence=0)
     notes = []
