@@ -67,7 +67,7 @@ MAX_HALF_SPAN = 400  # bins each way: bounds the work of one fit
 MAX_FIT_BINS = 240  # a wider band is fitted on every k-th bin
 SHAPES = ((False, False), (True, False), (True, True))  # (asymmetric residues, tilted background)
 RESOLVED_BINS = 4  # a peak narrower than this (half-width, in bins) is fitted alone, by its top
-TRUSTED_MISFIT = 0.02  # a joint fit missing the spectrum by more (rms) places no pole away from the top seen
+TRUSTED_MISFIT = 0.04  # a joint fit missing the spectrum by more (rms) places no pole away from the top seen
 ON_TOP = 1.0  # a pole its half-width off a top, where a peak is at half its height, is not that peak
 Z90 = 1.6448536269514722  # the standard normal's 95th percentile: a two-sided 90 % interval
 
@@ -316,10 +316,10 @@ def _fit_modes(spectrum: Spectrum, excitation: str, peaks: list[tuple[float, flo
     joint = _resolved_modes(spectrum, response, [members[k] for k in resolved]) if resolved else []
     modes = {}
     for k, mode in zip(resolved, joint):
-        # a pole outside the half-power band of the peak it stands for (its half-width off the top,
-        # or half a bin of the plotted spectrum) is not the peak seen
-        if mode is not None and abs(mode.damped_frequency - peaks[k][0]) < max(ON_TOP * mode.zeta * mode.frequency,
-                                                                                seen_step / 2):
+        # a pole outside the half-power band of the peak it stands for (its half-width, or half a
+        # bin, off the top of the plotted fitted spectrum) is not the peak seen
+        if mode is not None and abs(mode.damped_frequency - tops[k][0]) < max(ON_TOP * mode.zeta * mode.frequency,
+                                                                               step / 2):
             modes[k] = mode
     for k, (at, height) in enumerate(peaks):
         if k not in modes:
