@@ -183,9 +183,10 @@ def find_modes(spectrum: Spectrum, *, excitation: str = "sweep", f_min: float | 
                max_modes: int = MAX_MODES, min_share: float = MIN_SHARE, fine: Spectrum | None = None,
                spectrogram: Spectrogram | None = None) -> Modes:
     """The resonances of ``spectrum`` between ``f_min`` and ``f_max`` (Hz; for a sweep up to 200 Hz,
-    as Klipper plots it, by default), strongest first (module docstring). ``fine`` is a finer spectrum of the same recording to fit the modes' shapes on (the
-    peaks are seen in ``spectrum``); ``spectrogram`` of the same recording tells a tone from a
-    resonance. An empty ``modes`` means no resonance stands out, and ``notes`` says why.
+    as Klipper plots it, by default), strongest first (module docstring). ``fine`` is a finer
+    spectrum of the same recording to fit the modes' shapes on (the peaks are seen in ``spectrum``);
+    ``spectrogram`` of the same recording tells a tone from a resonance. An empty ``modes`` means no
+    resonance stands out, and ``notes`` says why.
 
     >>> import numpy as np
     >>> f = np.arange(1.0, 200.0, 0.25)

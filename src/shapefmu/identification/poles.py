@@ -37,8 +37,8 @@ class PoleForm:
     kernel offsets) smeared by ``weights``; ``asymmetric`` lets the residues be complex (else real: a
     peak nearly symmetric about its pole). The background B is real: near a pole only the phase of
     the residue relative to B shows in |H|^2, so a phase of B would be a direction the fit cannot
-    tell apart. Parameters per pole: log f_k, log sigma_k, Re R_k / sigma_k (and Im R_k / sigma_k),
-    then B."""
+    tell apart; ``tilted`` adds a complex slope to B, (f / f_mean - 1) (b_r + j b_i). Parameters per
+    pole: log f_k, log sigma_k, Re R_k / sigma_k (and Im R_k / sigma_k), then B (and b_r, b_i)."""
 
     def __init__(self, grid: np.ndarray, weights: np.ndarray, count: int, asymmetric: bool, tilted: bool = False):
         self.grid, self.weights, self.count, self.asymmetric, self.tilted = grid, weights, count, asymmetric, tilted
