@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
+from shapefmu.files import save_figure, write_text
 from shapefmu.optimal.moves import Command, _u_max, residual_after_move
 from shapefmu.optimal.solution import TimeOptimalSolution, time_optimal
 from shapefmu.plants import as_plant, rigid_part
@@ -109,8 +110,10 @@ def plot_comparison(comparison: MoveComparison, plant, path) -> None:
         axes[2].legend(fontsize="small")
     axes[-1].set_xlabel("time [s]")
     fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
+    try:
+        save_figure(fig, path)
+    finally:
+        plt.close(fig)
 
 
 def optimal_report(path, distance: float, u_max: float | None = None, plot=None, json_path=None,
@@ -127,8 +130,7 @@ def optimal_report(path, distance: float, u_max: float | None = None, plot=None,
              f"refined final-state residual {optimal.residual:.3e} (transcription T = {optimal.transcription_T:.10g} s)"]
     for target, text, what in ((json_path, optimal.to_json, "solution"), (csv_path, optimal.to_csv, "signal table")):
         if target is not None:
-            Path(target).parent.mkdir(parents=True, exist_ok=True)
-            Path(target).write_text(text())
+            write_text(target, text(), what)
             lines.append(f"{what} written to {target}")
     if plot is not None:
         plot_comparison(comparison, plant, plot)

@@ -35,6 +35,7 @@ import zipfile
 from pathlib import Path
 
 from shapefmu import __version__
+from shapefmu.files import check_output, write_file
 from shapefmu.fmi.compiler import run_compiler
 from shapefmu.fmi.python.model_description import model_description
 from shapefmu.fmi.python.slaves import SLAVES
@@ -140,7 +141,8 @@ def compile_shim(out: Path, model_identifier: str, guid: str, libpython: str | N
     """
     compiler = os.environ.get("CC") or shutil.which("cc") or shutil.which("gcc")
     if not compiler:
-        raise RuntimeError("a C compiler (cc or gcc, or $CC) is needed to build the FMU's front end")
+        raise ValueError("no C compiler: a pythonfmu FMU's front end is compiled when it is built, with $CC, cc or "
+                         "gcc, and none is on PATH; install one (Debian/Ubuntu: apt install gcc) or set CC")
     libpython = _libpython() if libpython is None else libpython
     if minors is None:
         minors = [sys.version_info.minor] + [m for m in FALLBACK_MINORS if m != sys.version_info.minor]
@@ -191,25 +193,26 @@ def build_fmu(name: str, out_path, **start_values) -> Path:
     xml = model_description(slave, guid, dependencies, slave.experiment(), pythonfmu_version)
     entry = f"{package}_{name}"
     build = {"guid": guid, "package": package, "start_values": baked, "dependencies": dependencies}
-    out_path.parent.mkdir(parents=True, exist_ok=True)
+    check_output(out_path, "FMU")
     with tempfile.TemporaryDirectory(prefix="shapefmu_build_") as temp:
         shim = compile_shim(Path(temp) / f"{name}.so", name, guid)
-        partial = out_path.with_name(out_path.name + ".partial")
-        with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as fmu:
-            fmu.writestr("modelDescription.xml", xml)
-            fmu.write(shim, f"binaries/linux64/{name}.so")
-            fmu.write(export_library, f"binaries/linux64/{name}_pythonfmu.so")
-            for source in SHIM_FILES:  # the record; hosts do not build it
-                fmu.write(source, f"resources/shim/{source.name}")
-            fmu.writestr("resources/slavemodule.txt", entry)
-            fmu.writestr(f"resources/{entry}.py", ENTRY_MODULE.format(name=name, package=package, module=SLAVES[name]))
-            fmu.writestr(f"resources/{BUILD_FILE}", json.dumps(build, indent=2))
-            for relative, content in files.items():
-                fmu.writestr(f"resources/{package}/{relative}", content)
-            for relative, content in _documentation(xml, name).items():
-                fmu.writestr(relative, content)
-        partial.replace(out_path)  # no half-written FMU is ever left under the final name
-    return out_path
+
+        def write(partial):
+            with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as fmu:
+                fmu.writestr("modelDescription.xml", xml)
+                fmu.write(shim, f"binaries/linux64/{name}.so")
+                fmu.write(export_library, f"binaries/linux64/{name}_pythonfmu.so")
+                for source in SHIM_FILES:  # the record; hosts do not build it
+                    fmu.write(source, f"resources/shim/{source.name}")
+                fmu.writestr("resources/slavemodule.txt", entry)
+                fmu.writestr(f"resources/{entry}.py", ENTRY_MODULE.format(name=name, package=package, module=SLAVES[name]))
+                fmu.writestr(f"resources/{BUILD_FILE}", json.dumps(build, indent=2))
+                for relative, content in files.items():
+                    fmu.writestr(f"resources/{package}/{relative}", content)
+                for relative, content in _documentation(xml, name).items():
+                    fmu.writestr(relative, content)
+
+        return write_file(out_path, write, "FMU")  # no half-written FMU is ever left under the final name
 
 
 def _documentation(xml: str, name: str) -> dict[str, bytes]:
@@ -217,17 +220,25 @@ def _documentation(xml: str, name: str) -> dict[str, bytes]:
     from shapefmu.fmi.documentation import icon_png, index_html
 
     about = importlib.import_module(f"shapefmu.fmi.python.slaves.{SLAVES[name]}").__doc__
-    libpython = _libpython() or f"libpython3.{sys.version_info.minor} (a shared library)"
+    # The library's file name only: the build machine's folders say nothing about the user's machine.
+    soname = Path(_libpython()).name or f"libpython3.{sys.version_info.minor}.so.1.0"
     dependencies = (f"The {name} FMU runs its model in CPython, embedded through pythonfmu's export library.\n"
-                    f"It needs the CPython 3 shared library: built with {libpython}; where that file is missing it looks "
-                    f"for libpython3.{{{','.join(str(m) for m in (sys.version_info.minor, *FALLBACK_MINORS))}}}.so.1.0 on "
+                    f"It needs the CPython 3 shared library: built with CPython 3.{sys.version_info.minor} ({soname}); "
+                    f"where the build's copy is missing it looks for "
+                    f"libpython3.{{{','.join(str(m) for m in dict.fromkeys((sys.version_info.minor, *FALLBACK_MINORS)))}}}.so.1.0 on "
                     f"the library path.\nIt needs no Python package: its code is inside, under resources/.\n")
     return {"documentation/index.html": index_html(xml.encode(), about, ["linux64"]).encode(),
             "documentation/externalDependencies.txt": dependencies.encode(),
             "model.png": icon_png()}
 
 
-def build_all(out_dir) -> list[Path]:
-    """Build every registered FMU with its default start values into ``out_dir``."""
+def build_all(out_dir, progress=None) -> list[Path]:
+    """Build every registered FMU with its default start values into ``out_dir``; ``progress``
+    (a function of a line of text, or None) is told as each FMU begins."""
     out_dir = Path(out_dir)
-    return [build_fmu(name, out_dir / f"{name}.fmu") for name in SLAVES]
+    built = []
+    for name in SLAVES:
+        if progress is not None:
+            progress(f"building {name}.fmu")
+        built.append(build_fmu(name, out_dir / f"{name}.fmu"))
+    return built
