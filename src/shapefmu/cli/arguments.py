@@ -28,6 +28,22 @@ def parse_mode(text: str) -> tuple[float, float]:
     return 2.0 * math.pi * hz, zeta
 
 
+# A Shaper FMU built without --ts samples the highest mode's period this many times (build shaper and
+# recommend --build alike): its impulses are split between grid points (runtime/shaper_filter.py), so
+# a finer grid only lengthens the step loop.
+SHAPER_SAMPLES_PER_PERIOD = 100
+
+
+def default_shaper_ts(omega_max: float) -> float:
+    """The default sampling period (s) of a Shaper FMU whose highest mode is at ``omega_max`` rad/s
+    (as ``parse_mode`` reads it).
+
+    >>> round(default_shaper_ts(2 * math.pi * 50.0), 12)
+    0.0002
+    """
+    return 2.0 * math.pi / omega_max / SHAPER_SAMPLES_PER_PERIOD
+
+
 def examples(*lines: str) -> str:
     """An ``epilog`` of example command lines (each may end in ``#  what it does``)."""
     return "example" + ("s" if len(lines) > 1 else "") + ":\n" + "\n".join(f"  {line}" for line in lines)

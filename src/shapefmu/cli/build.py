@@ -21,7 +21,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from shapefmu.cli.arguments import examples, output_file, output_folder, parse_mode
+from shapefmu.cli.arguments import default_shaper_ts, examples, output_file, output_folder, parse_mode
 from shapefmu.cli.progress import reporter
 
 
@@ -138,7 +138,7 @@ def _build_shaper(args):
     for i, (omega, zeta) in enumerate(args.mode, start=1):
         starts[f"f[{i}]"] = omega / (2.0 * math.pi)
         starts[f"zeta[{i}]"] = zeta
-    starts["Ts"] = args.ts if args.ts is not None else 2.0 * math.pi / max(w for w, _ in args.mode) / 100.0
+    starts["Ts"] = args.ts if args.ts is not None else default_shaper_ts(max(w for w, _ in args.mode))
     check_sampling(args.mode, starts["Ts"], allow_aliasing=args.allow_aliasing)
     return [_builder(args)("Shaper", Path(args.out), **starts)]
 

@@ -12,7 +12,7 @@ import math
 import sys
 from pathlib import Path
 
-from shapefmu.cli.arguments import examples, output_file, parse_mode, say_written
+from shapefmu.cli.arguments import default_shaper_ts, examples, output_file, parse_mode, say_written
 from shapefmu.cli.progress import showing
 
 AXIS_CHOICES = ("x", "y", "z", "xyz")
@@ -212,7 +212,7 @@ def _build(pick, out: Path, *, python: bool, fmi_version: str = "2.0") -> list[P
     else:
         model = "Shaper"
         starts = {"n": 1, "n_modes": 1, **starts}
-        starts["Ts"] = 1.0 / (200.0 * max(pick.frequencies))
+        starts["Ts"] = default_shaper_ts(2.0 * math.pi * max(pick.frequencies))
     if python:
         if fmi_version != "2.0":
             raise ValueError(f"--fmi-version {fmi_version} needs the native FMU: the pythonfmu FMUs (--python) are "
