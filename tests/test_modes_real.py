@@ -95,7 +95,8 @@ def test_each_mode_has_a_damping_interval_around_it(found, name):
         assert 0 < low <= mode.zeta <= high <= 1 and math.isfinite(mode.frequency_sd)
 
 
-@pytest.mark.parametrize("module", ["recordings", "spectra", "poles", "modes", "synthetic_chain"])
+@pytest.mark.parametrize("module", ["recordings", "spectra", "poles", "modes", "synthetic_chain", "metrics", "judge",
+                                    "klipper", "firmware", "families", "trains", "recommend"])
 def test_the_docstring_examples_run(module):
     import doctest
     import importlib
