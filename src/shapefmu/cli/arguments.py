@@ -28,9 +28,9 @@ def parse_mode(text: str) -> tuple[float, float]:
     return 2.0 * math.pi * hz, zeta
 
 
-# A Shaper FMU built without --ts samples the highest mode's period this many times (build shaper and
-# recommend --build alike): its impulses are split between grid points (runtime/shaper_filter.py), so
-# a finer grid only lengthens the step loop.
+# A Shaper FMU built without --ts samples the highest mode's period this many times, build shaper and
+# recommend --build alike (one rule, one place: issue 33 item 4); impulses between grid points are split
+# between the two (runtime/shaper_filter.py).
 SHAPER_SAMPLES_PER_PERIOD = 100
 
 
