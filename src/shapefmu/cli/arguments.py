@@ -13,8 +13,8 @@ import sys
 from pathlib import Path
 
 
-def parse_mode(text: str) -> tuple[float, float]:
-    """``"2000"`` or ``"2000:0.01"`` (Hz, damping ratio) -> (omega rad/s, zeta)."""
+def parse_mode_hz(text: str) -> tuple[float, float]:
+    """``"2000"`` or ``"2000:0.01"`` -> (f Hz, zeta), as an FMU's f[i] and zeta[i] take them."""
     hz_text, _, zeta_text = text.partition(":")
     try:
         hz = float(hz_text)
@@ -25,23 +25,13 @@ def parse_mode(text: str) -> tuple[float, float]:
         raise argparse.ArgumentTypeError(f"--mode frequency must be > 0 Hz, got {hz_text!r}")
     if not (math.isfinite(zeta) and 0 <= zeta < 1):
         raise argparse.ArgumentTypeError(f"--mode damping ratio must be in [0, 1), got {zeta_text!r}")
+    return hz, zeta
+
+
+def parse_mode(text: str) -> tuple[float, float]:
+    """``"2000"`` or ``"2000:0.01"`` (Hz, damping ratio) -> (omega rad/s, zeta), as the Python API takes them."""
+    hz, zeta = parse_mode_hz(text)
     return 2.0 * math.pi * hz, zeta
-
-
-# A Shaper FMU built without --ts samples the highest mode's period this many times, build shaper and
-# recommend --build alike (one rule, one place: issue 33 item 4); impulses between grid points are split
-# between the two (runtime/shaper_filter.py).
-SHAPER_SAMPLES_PER_PERIOD = 100
-
-
-def default_shaper_ts(omega_max: float) -> float:
-    """The default sampling period (s) of a Shaper FMU whose highest mode is at ``omega_max`` rad/s
-    (as ``parse_mode`` reads it).
-
-    >>> round(default_shaper_ts(2 * math.pi * 50.0), 12)
-    0.0002
-    """
-    return 2.0 * math.pi / omega_max / SHAPER_SAMPLES_PER_PERIOD
 
 
 def examples(*lines: str) -> str:
@@ -156,7 +146,7 @@ def add_experiment_arguments(parser: argparse.ArgumentParser) -> None:
 
 def experiment(system, args) -> tuple[float, float]:
     """(stop time, step) of a run: ``--stop`` and ``--step``, else the system's own."""
-    from shapefmu.fmi.ssp_targets import written_step
+    from shapefmu.fmi.ssp.targets import written_step
 
     stop = args.stop if args.stop is not None else system.stop_time
     step = args.step if args.step is not None else written_step(system)

@@ -12,7 +12,7 @@ import math
 import sys
 from pathlib import Path
 
-from shapefmu.cli.arguments import default_shaper_ts, examples, output_file, parse_mode, say_written
+from shapefmu.cli.arguments import examples, output_file, parse_mode, say_written
 from shapefmu.cli.progress import showing
 
 AXIS_CHOICES = ("x", "y", "z", "xyz")
@@ -208,6 +208,7 @@ def _build(pick, out: Path, *, python: bool, fmi_version: str = "2.0") -> list[P
     """The pick as a Shaper or ShapeFilter FMU (native unless ``python``; native as FMI
     ``fmi_version``) and its .ssv parameter set, a file beside it the user did not name (never one that exists)."""
     from shapefmu.fmi.ssp import write_ssv
+    from shapefmu.shapers.catalog import default_sampling_period
 
     if pick.fmu is None:
         raise ValueError(f"the pick ({pick.label}, {pick.family}) is not a design an FMU kind holds")
@@ -217,7 +218,7 @@ def _build(pick, out: Path, *, python: bool, fmi_version: str = "2.0") -> list[P
     else:
         model = "Shaper"
         starts = {"n": 1, "n_modes": 1, **starts}
-        starts["Ts"] = default_shaper_ts(2.0 * math.pi * max(pick.frequencies))
+        starts["Ts"] = default_sampling_period(pick.frequencies)
     if python:
         if fmi_version != "2.0":
             raise ValueError(f"--fmi-version {fmi_version} needs the native FMU: the pythonfmu FMUs (--python) are "

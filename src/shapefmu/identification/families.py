@@ -200,17 +200,14 @@ def _two_modes(m1, m2, zeta, left_out) -> list[Batch]:
 def _windows(low, high, zeta, ts, left_out) -> list[Batch]:
     """The window filters of paper 000, a batch per filter: each row its taps as impulses at k ts (ts
     adjusted per frequency so a period holds whole samples), shorter rows led by zero taps at 0 s."""
-    from shapefmu.shapers import window
+    from shapefmu.shapers.window import get_window
 
-    makers = {"rectangle": window.rectangle_filter, "hanning": window.hanning_filter,
-              "blackman": window.blackman_filter, "hamming": window.hamming_filter,
-              "three-hanning": window.three_hanning_filter}
     batches = []
     for kind in WINDOW_KINDS:
         rows = []
         for f in _log_grid(low, high, 0.04):
             try:
-                shaper = makers[kind](2 * math.pi * f, zeta, ts, 1, adjust_ts=True)
+                shaper = get_window(kind, 2 * math.pi * f, zeta, ts, 1, adjust_ts=True)
             except ValueError:
                 continue  # too few samples per period at this frequency for this ts
             rows.append((f, np.asarray(shaper.taps, dtype=float), shaper.ts))
