@@ -21,9 +21,24 @@ MACHINES = {
 }
 
 
-def assert_modes(found, machine, frequency_error=0.01, zeta_error=0.25):
-    assert len(found) == len(machine), [m.describe() for m in found]
-    for true in machine:
+def visible(machine):
+    """The modes a person clearly sees in Klipper's plot of the machine's response to its sweep
+    (issue 32): a peak of f |T(f)|^2 reaching a fifth of the highest (a tenth is the rule; Klipper's
+    coarse spectrum lowers a sharp peak, so a mode between a tenth and a fifth may be seen or not)."""
+    from scipy.signal import find_peaks
+
+    freq = np.linspace(5, 200, 40000)
+    view = freq * np.abs(syn.transmissibility(machine, freq)) ** 2
+    peaks, _ = find_peaks(view, height=0.2 * view.max())
+    return [min(machine, key=lambda m: abs(m.frequency - freq[i])) for i in peaks]
+
+
+def assert_modes(found, machine, frequency_error=0.01, zeta_error=0.25, seen=None):
+    """Every mode of ``seen`` (all of ``machine`` by default) found, every mode found one of ``machine``."""
+    seen = machine if seen is None else seen
+    assert all(any(abs(m.frequency / t.frequency - 1) < frequency_error for t in machine) for m in found), \
+        [m.describe() for m in found]
+    for true in seen:
         mode = min(found, key=lambda m: abs(m.frequency - true.frequency))
         assert abs(mode.frequency / true.frequency - 1) < frequency_error, (mode.describe(), true)
         assert abs(mode.zeta / true.zeta - 1) < zeta_error, (mode.describe(), true)
@@ -46,7 +61,7 @@ def recordings(tmp_path_factory):
 @pytest.mark.parametrize("name", MACHINES)
 def test_klipper_raw_recordings_give_the_machines_modes(recordings, name):
     found = identify(recordings[name][0], axis="x")
-    assert_modes(found.modes.modes, MACHINES[name])
+    assert_modes(found.modes.modes, MACHINES[name], seen=visible(MACHINES[name]))
     assert found.recording.jitter > 0.001 and found.recording.gaps == 0  # jittered, as Klipper's are
 
 
@@ -56,7 +71,7 @@ def test_m956_and_spectrum_files_give_the_raw_files_modes(recordings, name, tmp_
     rrf = identify(recordings[name][1], axis="x", excitation="sweep").modes.modes
     assert_modes(rrf, [syn.SyntheticMode(m.frequency, m.zeta) for m in raw])
     # the processed file Klipper writes from the same data: its spectra, written and read back
-    x, y = (identify(recordings[name][0], axis=a).spectrum for a in "xy")
+    x, y = (identify(recordings[name][0], axis=a).modes.spectrum for a in "xy")  # the fine spectra
     spectrum_file = tmp_path / "calibration_data_x.csv"
     syn.write_klipper_spectrum(spectrum_file, x.freq, (x.psd, y.psd, 0 * x.psd))
     processed = identify(spectrum_file, axis="x").modes.modes
@@ -84,7 +99,7 @@ def test_a_ring_down_is_refined_by_the_ekf_and_checked_by_the_log_decrement(tmp_
     t, y = syn.ring_down(machine, fs=1000.0, duration=4.0)
     path = tmp_path / "tap.csv"
     np.savetxt(path, np.column_stack([t, y]), delimiter=",", header="t,y", comments="")
-    found = identify(path, axis="y", time_column="t", columns=["y"], response="mode", ringdown=True)
+    found = identify(path, axis="y", time_column="t", columns=["y"], ringdown=True)
     (mode,) = found.modes.modes
     assert mode.method == "EKF on the ring-down"
     assert_modes([mode], machine, zeta_error=0.1)
@@ -122,7 +137,7 @@ def test_unknown_columns_a_rate_too_low_and_no_resonance(tmp_path):
     code, _, err = guarded(["identify", path, "--time", "t", "--column", "noise", "--axis", "noise", "--f-max", "300"])
     assert code == 2 and "f_max = 300 Hz is above the highest frequency of the spectrum, 200 Hz" in err
     code, out, err = guarded(["identify", path, "--time", "t", "--column", "noise", "--axis", "noise"])
-    assert code == 0 and "no resonance above the threshold" in out
+    assert code == 0 and "no resonance" in out
     code, _, err = guarded(["recommend", path, "--time", "t", "--column", "noise", "--axis", "noise"])
     assert code == 2 and "no resonance found in the recordings" in err
 

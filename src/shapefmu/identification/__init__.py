@@ -6,15 +6,18 @@
     advice = ident.recommend(judged, found.modes.modes)            # a Recommendation: pick, Klipper's pick
 
 - ``recordings``: Klipper raw and processed files, RepRapFirmware M956, any CSV/Parquet table;
-- ``spectra``: Welch spectra with their settings, axes combined, Klipper's sweep excitation undone;
-- ``modes``: resonances with frequency, damping and uncertainty (spectrum fit; EKF on a ring-down);
+- ``spectra``: Klipper's own spectrum and normalisation, finer Welch spectra, spectrograms;
+- ``modes``: the resonances a person sees, with frequency, damping and its 90 % interval; no mode in
+  noise, no tone taken for one (EKF on a ring-down);
+- ``poles``: the local pole form of a linear system's response, fitted to a spectrum;
 - ``metrics``: Klipper's remaining vibration, smoothing, max acceleration and score, derived and vectorised;
 - ``klipper``: Klipper's shapers, spectrum reading, frequency scan and pick, rebuilt from its definitions;
 - ``judge``: designs judged by those measures on the spectra, and the judged ``Candidate``;
 - ``firmware``, ``families``, ``trains``: what Klipper, RepRapFirmware, Marlin and an FMU run, and impulse
   trains designed for the spectrum;
 - ``recommend``: Klipper's pick, the candidates a firmware runs, the guards and the pick;
-- ``synthetic``: recordings of known machines, made as Klipper and RepRapFirmware make them.
+- ``synthetic``: recordings of known machines, made as Klipper and RepRapFirmware make them;
+- ``synthetic_chain``: raw Klipper tests of mass-spring-damper chains the fitter knows nothing about.
 """
 
 from __future__ import annotations
@@ -42,14 +45,31 @@ class Identified:
 
 
 def identify(path, *, axis="xyz", time_column=None, fs=None, columns=None, undo_sweep: bool = False,
-             excitation: str | None = None, response: str = "transmitted", f_min=None, f_max=None,
-             ringdown: bool = False, resolution: float | None = None, prominence: float = 0.5) -> Identified:
+             excitation: str | None = None, f_min=None, f_max=None, ringdown: bool = False,
+             resolution: float | None = None) -> Identified:
     """Read ``path`` (any format of ``recordings``), take the spectrum along ``axis`` and find its modes.
 
-    ``excitation`` defaults to ``"sweep"`` for Klipper's files (its ``TEST_RESONANCES`` sweep) and
-    ``"flat"`` otherwise; with ``undo_sweep`` the f^2 is divided out first. ``ringdown`` refines each
-    mode with the EKF on the recording's samples (``modes.ring_down``).
+    The spectrum judged is Klipper's (``spectra.klipper_psd``) for a recording, the file's own for a
+    Klipper spectrum file; the modes are seen in it and fitted on a finer one (``spectra.spectrum``
+    at ``resolution`` Hz, 0.1 by default) where there are samples, with their spectrogram telling a
+    steady tone from a resonance. ``excitation`` defaults to ``"sweep"`` for Klipper's files (its
+    ``TEST_RESONANCES`` sweep) and ``"flat"`` otherwise; with ``undo_sweep`` the f^2 is divided out of
+    the spectrum handed on. ``ringdown`` refines each mode with the EKF on the recording's samples
+    (``modes.ring_down``).
+
+    >>> import pathlib, tempfile
+    >>> import numpy as np
+    >>> f = np.arange(0.0, 200.0, 1.5625)                             # Klipper's bins at 3.2 kHz
+    >>> psd = 1e4 * f**2 / ((f**2 - 45.0**2) ** 2 + (0.1 * 45.0 * f) ** 2)  # a 45 Hz peak, zeta 0.05
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "resonances_x.csv"
+    >>> rows = "".join(f"{a:.1f},{b:.3e},0,0,{b:.3e}\\n" for a, b in zip(f, psd))
+    >>> _ = path.write_text("freq,psd_x,psd_y,psd_z,psd_xyz\\n" + rows)
+    >>> found = identify(path, axis="x")
+    >>> [f"{m.damped_frequency:.1f} Hz" for m in found.modes.modes], found.recording is None
+    (['45.0 Hz'], True)
     """
+    from dataclasses import replace
+
     from shapefmu.identification import recordings, spectra
 
     read = read_recording(path, time_column=time_column, fs=fs, columns=columns)
@@ -59,22 +79,19 @@ def identify(path, *, axis="xyz", time_column=None, fs=None, columns=None, undo_
         key = axis if isinstance(axis, str) else None
         if key not in read:
             raise ValueError(f"{path}: no spectrum for axis {axis!r}; it has {', '.join(read)}")
-        recording, found = None, read[key]
+        recording, judged, fine, gram = None, read[key], None, None
         kind = recordings.KLIPPER_SPECTRUM
     else:
         recording = read
         options = {} if resolution is None else {"resolution": resolution}
-        found = spectra.spectrum(recording, axis, **options)
+        judged = spectra.klipper_psd(recording, axis)
+        fine = spectra.spectrum(recording, axis, **options)
+        gram = spectra.spectrogram(recording, axis)
         kind = recording.format
-    if undo_sweep:
-        found = undo_sweep_excitation(found)
     if excitation is None:
         excitation = "sweep" if kind in (recordings.KLIPPER_RAW, recordings.KLIPPER_SPECTRUM) else "flat"
-    modes = find_modes(found, response=response, excitation=excitation, f_min=f_min, f_max=f_max,
-                       prominence=prominence)
+    modes = find_modes(judged, excitation=excitation, f_min=f_min, f_max=f_max, fine=fine, spectrogram=gram)
     if ringdown and modes.modes:
-        from dataclasses import replace
-
         samples = spectra.axis_samples(recording, axis) if axis != "xyz" else next(iter(recording.channels.values()))
         modes = replace(modes, modes=ring_down(samples, recording.fs, modes))
-    return Identified(recording, found, modes)
+    return Identified(recording, undo_sweep_excitation(judged) if undo_sweep else judged, modes)

@@ -60,14 +60,25 @@ def _grid(low, high, step=SCAN_STEP):
 
 def klipper_fmu(name: str, freq: float) -> dict | None:
     """The Shaper FMU start values of Klipper's ``name`` at ``freq``: the design layer's zv, mzv and zvd
-    are Klipper's (the same amplitudes and times at damping 0.1); its EI fits are not."""
+    are Klipper's (the same amplitudes and times at damping 0.1); its EI fits are not.
+
+    >>> klipper_fmu("mzv", 40.0), klipper_fmu("ei", 40.0)
+    ({'kind': 'mzv', 'f[1]': 40.0, 'zeta[1]': 0.1}, None)
+    """
     if name not in ("zv", "mzv", "zvd"):
         return None
     return {"kind": name, "f[1]": float(freq), "zeta[1]": klipper.DEFAULT_DAMPING_RATIO}
 
 
 def klipper_scan(top: float, axes) -> list[Batch]:
-    """Klipper's six shapers from each one's lowest frequency to ``top`` Hz."""
+    """Klipper's six shapers from each one's lowest frequency to ``top`` Hz.
+
+    >>> batches = klipper_scan(50.0, "x")
+    >>> [(b.kind, len(b.frequencies)) for b in batches][:2]  # 21 and 23 Hz (their lowest) to 49.9 Hz by 0.1 Hz
+    [('zv', 290), ('mzv', 270)]
+    >>> batches[0].line(0).splitlines()[1:]
+    ['shaper_type_x: zv', 'shaper_freq_x: 21.0']
+    """
     batches = []
     for name, shaper in klipper.SHAPERS.items():
         freqs = _grid(shaper.min_freq, top)
@@ -79,7 +90,12 @@ def klipper_scan(top: float, axes) -> list[Batch]:
 
 
 def rrf_scan(top: float) -> list[Batch]:
-    """RepRapFirmware's built-in shapers from 10 Hz to ``top``."""
+    """RepRapFirmware's built-in shapers from 10 Hz to ``top``.
+
+    >>> batch = rrf_scan(10.2)[0]
+    >>> batch.kind, [round(float(f), 1) for f in batch.frequencies[:, 0]], batch.line(1)
+    ('zvd', [10.0, 10.1], 'M593 P"zvd" F10.10 S0.1')
+    """
     freqs = _grid(max(10.0, firmware.RRF_FREQ[0]), min(top, firmware.RRF_FREQ[1]))
     batches = []
     for kind in firmware.RRF_TYPES:
@@ -90,14 +106,23 @@ def rrf_scan(top: float) -> list[Batch]:
 
 
 def rrf_custom(name: str, times, amplitudes, frequencies=(), zetas=()) -> Batch:
-    """One train as RepRapFirmware's custom shaper: what its printed line sets."""
+    """One train as RepRapFirmware's custom shaper: what its printed line sets.
+
+    >>> rrf_custom("custom (train)", [0.0, 0.0125], [0.5, 0.5]).line(0)
+    'M593 P"custom" H0.500000 T0.012500'
+    """
     line, times, amplitudes = firmware.rrf_custom(times, amplitudes)
     return Batch(name, "rrf", np.array([frequencies], dtype=float).reshape(1, -1), tuple(zetas), times[None],
                  amplitudes[None], lambda i: line)
 
 
 def marlin_scan(top: float, axes) -> list[Batch]:
-    """Marlin's fixed-time shapers and its planner's ZV from 20 Hz to ``top``."""
+    """Marlin's fixed-time shapers and its planner's ZV from 20 Hz to ``top``.
+
+    >>> batches = marlin_scan(20.2, "x")
+    >>> [b.kind for b in batches][-2:], batches[0].line(1)
+    (['MZV', 'M593 ZV'], 'M493 S1 X C1 A20.10 I0.1 Q0.05')
+    """
     freqs = _grid(MARLIN_LOWEST, top)
     batches = []
     for mode in firmware.MARLIN_MODES:
@@ -116,7 +141,14 @@ def _log_grid(low, high, step):
 
 def design_layer(modes, zeta: float, ts: float, left_out: list) -> list[Batch]:
     """The Shaper and ShapeFilter FMU designs (module docstring) for ``modes`` designed at ``zeta``;
-    kinds that refuse it are named in ``left_out``."""
+    kinds that refuse it are named in ``left_out``.
+
+    >>> from shapefmu.identification.modes import Mode
+    >>> left_out = []
+    >>> batches = design_layer([Mode(40.0, 0.05, 0.1, 0.01, 1.0, "fit")], 0.05, 1e-3, left_out)
+    >>> [b.kind for b in batches][:4], [b.family for b in batches][-1], left_out
+    (['zv', 'mzv', 'zvd', 'zvdd'], 'window', [])
+    """
     from shapefmu.shapers.catalog import design
 
     low, high = 0.5 * min(m.frequency for m in modes), 2.0 * max(m.frequency for m in modes)
@@ -168,17 +200,14 @@ def _two_modes(m1, m2, zeta, left_out) -> list[Batch]:
 def _windows(low, high, zeta, ts, left_out) -> list[Batch]:
     """The window filters of paper 000, a batch per filter: each row its taps as impulses at k ts (ts
     adjusted per frequency so a period holds whole samples), shorter rows led by zero taps at 0 s."""
-    from shapefmu.shapers import window
+    from shapefmu.shapers.window import get_window
 
-    makers = {"rectangle": window.rectangle_filter, "hanning": window.hanning_filter,
-              "blackman": window.blackman_filter, "hamming": window.hamming_filter,
-              "three-hanning": window.three_hanning_filter}
     batches = []
     for kind in WINDOW_KINDS:
         rows = []
         for f in _log_grid(low, high, 0.04):
             try:
-                shaper = makers[kind](2 * math.pi * f, zeta, ts, 1, adjust_ts=True)
+                shaper = get_window(kind, 2 * math.pi * f, zeta, ts, 1, adjust_ts=True)
             except ValueError:
                 continue  # too few samples per period at this frequency for this ts
             rows.append((f, np.asarray(shaper.taps, dtype=float), shaper.ts))

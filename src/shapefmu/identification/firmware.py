@@ -107,7 +107,11 @@ def rrf_custom(times, amplitudes) -> tuple[str, np.ndarray, np.ndarray]:
 
 
 def rrf_line(kind: str, freq: float, damping: float = DAMPING) -> str:
-    """``M593 P"<kind>" F<Hz> S<damping>``, checked against RRF's ranges."""
+    """``M593 P"<kind>" F<Hz> S<damping>``, checked against RRF's ranges.
+
+    >>> rrf_line("zvd", 40.0)
+    'M593 P"zvd" F40.00 S0.1'
+    """
     if not RRF_FREQ[0] <= freq <= RRF_FREQ[1]:
         raise ValueError(f"RepRapFirmware takes F in [{RRF_FREQ[0]:.2f}, {RRF_FREQ[1]:g}] Hz, got {freq!r}")
     return f'M593 P"{kind}" F{freq:.2f} S{damping:g}'
@@ -144,7 +148,11 @@ def marlin_train(mode: str, freq: float, damping: float = DAMPING, vtol: float =
 
 
 def marlin_line(mode: str, freq: float, axes, damping: float = DAMPING) -> str:
-    """``M493`` (fixed-time motion) for ``mode`` on ``axes``; ``M593`` for the planner's own ZV."""
+    """``M493`` (fixed-time motion) for ``mode`` on ``axes``; ``M593`` for the planner's own ZV.
+
+    >>> marlin_line("ZV", 40.0, "xy"), marlin_line("M593 ZV", 40.0, "x")
+    ('M493 S1 XY C1 A40.00 I0.1 Q0.05', 'M593 X F40.00 D0.1')
+    """
     flags = "".join(a.upper() for a in axes)
     if mode == "M593 ZV":
         return f"M593 {flags} F{freq:.2f} D{damping:g}"
@@ -152,5 +160,9 @@ def marlin_line(mode: str, freq: float, axes, damping: float = DAMPING) -> str:
 
 
 def klipper_line(name: str, freq: float, axes) -> str:
-    """Klipper's ``[input_shaper]`` lines (``klipper.config_lines``)."""
+    """Klipper's ``[input_shaper]`` lines (``klipper.config_lines``).
+
+    >>> klipper_line("ei", 51.4, "xy").splitlines()[1:]
+    ['shaper_type_x: ei', 'shaper_freq_x: 51.4', 'shaper_type_y: ei', 'shaper_freq_y: 51.4']
+    """
     return klipper.config_lines(name, freq, tuple(axes))

@@ -9,6 +9,7 @@ under max / 20.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -45,18 +46,43 @@ class Candidate:
 
     @property
     def label(self) -> str:
+        """The kind, marked ``x2`` for a pair of single-mode designs convolved.
+
+        >>> zv = Candidate("zv", "klipper", (40.0,), (0.0,), 0.12, 0.1, 6000.0, 1e-3, 0.0, 0.0125,
+        ...                (0.0, 0.0125), (0.5, 0.5))
+        >>> zv.label, dataclasses.replace(zv, family="pair").label
+        ('zv', 'zv x2')
+        """
         return f"{self.kind} x2" if self.family == "pair" else self.kind
 
     def same(self, other: Candidate) -> bool:
-        """The same impulses (or taps) as ``other``."""
+        """The same impulses (or taps) as ``other``.
+
+        >>> zv = Candidate("zv", "klipper", (40.0,), (0.0,), 0.12, 0.1, 6000.0, 1e-3, 0.0, 0.0125,
+        ...                (0.0, 0.0125), (0.5, 0.5))
+        >>> zv.same(dataclasses.replace(zv, kind="renamed")), zv.same(dataclasses.replace(zv, amplitudes=(0.6, 0.4)))
+        (True, False)
+        """
         return self.times == other.times and self.amplitudes == other.amplitudes
 
     def dominates(self, other: Candidate) -> bool:
-        """No more vibration and no less max_accel than ``other`` (Klipper's measures)."""
+        """No more vibration and no less max_accel than ``other`` (Klipper's measures).
+
+        >>> zv = Candidate("zv", "klipper", (40.0,), (0.0,), 0.12, 0.1, 6000.0, 1e-3, 0.0, 0.0125,
+        ...                (0.0, 0.0125), (0.5, 0.5))
+        >>> zv.dominates(dataclasses.replace(zv, vibration=0.2)), zv.dominates(dataclasses.replace(zv, max_accel=1e9))
+        (True, False)
+        """
         return self.vibration <= other.vibration and self.max_accel >= other.max_accel
 
     def row(self) -> dict:
-        """The JSON row: measures, impulses (or taps and ts) and the firmware line."""
+        """The JSON row: measures, impulses (or taps and ts) and the firmware line.
+
+        >>> zv = Candidate("zv", "klipper", (40.0,), (0.0,), 0.12, 0.1, 6000.0, 1e-3, 0.0, 0.0125,
+        ...                (0.0, 0.0125), (0.5, 0.5))
+        >>> zv.row()["impulse_times_s"], zv.row()["impulse_amplitudes"], zv.row()["firmware_line"]
+        ([0.0, 0.0125], [0.5, 0.5], None)
+        """
         shape = ({"taps": list(self.amplitudes), "ts": self.ts} if self.ts is not None
                  else {"impulse_times_s": list(self.times), "impulse_amplitudes": list(self.amplitudes)})
         return {"shaper": self.label, "family": self.family, "frequencies_hz": list(self.frequencies),
@@ -92,7 +118,13 @@ class Judge:
         self._meters: dict[tuple[float, float], list[metrics.VibrationMeter]] = {}
 
     def meters(self, max_freq: float | None = None, max_gain: float = 1.0) -> list[metrics.VibrationMeter]:
-        """One ``VibrationMeter`` per spectrum, cut at ``max_freq`` (default the judge's)."""
+        """One ``VibrationMeter`` per spectrum, cut at ``max_freq`` (default the judge's).
+
+        >>> freq = np.arange(1.0, 101.0)
+        >>> judge = Judge([(freq, np.exp(-((freq - 40) / 3) ** 2))])  # a peak at 40 Hz
+        >>> len(judge.meters()), judge.meters() is judge.meters()  # one spectrum; kept for the next batch
+        (1, True)
+        """
         key = (self.max_freq if max_freq is None else max_freq, max_gain)
         if key not in self._meters:
             self._meters[key] = [metrics.VibrationMeter(f, p, self.dampings, key[0], max_gain) for f, p in self.spectra]
@@ -100,7 +132,13 @@ class Judge:
 
     def vibration(self, times, amplitudes, max_freq: float | None = None) -> np.ndarray:
         """Klipper's remaining vibration of each design of the batch, worst over the spectra (in chunks
-        of ``CHUNK`` values of V, so a scan of thousands of designs stays within memory)."""
+        of ``CHUNK`` values of V, so a scan of thousands of designs stays within memory).
+
+        >>> freq = np.arange(1.0, 101.0)
+        >>> judge = Judge([(freq, np.exp(-((freq - 40) / 3) ** 2))])  # a peak at 40 Hz
+        >>> [round(float(v), 4) for v in judge.vibration([[0.0, 0.0125], [0.0, 0.0]], [[1.0, 1.0], [1.0, 0.0]])]
+        [0.1247, 1.0]
+        """
         times, amplitudes = np.atleast_2d(times), np.atleast_2d(amplitudes)
         gain = float(np.max(np.abs(amplitudes).sum(-1) / np.abs(amplitudes.sum(-1))))
         worst = np.zeros(times.shape[0])
@@ -112,14 +150,25 @@ class Judge:
         return worst
 
     def measures(self, times, amplitudes, max_freq: float | None = None):
-        """(vibration, smoothing, max_accel, score) arrays of a batch (rows of ``times``)."""
+        """(vibration, smoothing, max_accel, score) arrays of a batch (rows of ``times``).
+
+        >>> freq = np.arange(1.0, 101.0)
+        >>> judge = Judge([(freq, np.exp(-((freq - 40) / 3) ** 2))])  # a peak at 40 Hz
+        >>> [x.shape for x in judge.measures([[0.0, 0.0125]] * 3, [[1.0, 1.0]] * 3)]
+        [(3,), (3,), (3,), (3,)]
+        """
         vibration = self.vibration(times, amplitudes, max_freq)
         smooth = metrics.smoothing(times, amplitudes, self.accel, self.scv)
         return vibration, smooth, metrics.max_accel(times, amplitudes, self.max_smoothing, self.scv), \
             metrics.score(smooth, vibration)
 
     def at_modes(self, times, amplitudes) -> np.ndarray:
-        """Ours: the worst V at the identified modes, each at its damping and the test dampings."""
+        """Ours: the worst V at the identified modes, each at its damping and the test dampings.
+
+        >>> at_40 = Judge([(np.arange(1.0, 101.0), np.ones(100))], dampings=(0.0,), modes=[(40.0, 0.0)])
+        >>> float(abs(at_40.at_modes([0.0, 0.0125], [0.5, 0.5])[0])) < 1e-12  # ZV's zero: cos(pi) = -1
+        True
+        """
         worst = np.zeros(np.atleast_2d(times).shape[0])
         for f, zeta in self.modes:
             v = metrics.residual(np.atleast_2d(times), np.atleast_2d(amplitudes), [f], (*self.dampings, zeta))
@@ -128,7 +177,17 @@ class Judge:
 
     def candidate(self, kind: str, family: str, frequencies, zetas, times, amplitudes, *, ts=None, line=None,
                   fmu=None, guarded=True, max_freq: float | None = None) -> Candidate:
-        """One design judged exactly. With ``ts``, ``amplitudes`` are taps at k ts (``times`` ignored)."""
+        """One design judged exactly. With ``ts``, ``amplitudes`` are taps at k ts (``times`` ignored).
+
+        >>> freq = np.arange(1.0, 101.0)
+        >>> judge = Judge([(freq, np.exp(-((freq - 40) / 3) ** 2))])  # a peak at 40 Hz
+        >>> zv = judge.candidate("zv", "klipper", (40.0,), (0.0,), [0.0, 0.0125], [0.5, 0.5])
+        >>> zv.label, round(zv.vibration, 4), zv.duration
+        ('zv', 0.1247, 0.0125)
+        >>> window = judge.candidate("rectangle", "window", (40.0,), (0.0,), None, [0.25] * 4, ts=0.00625)
+        >>> [round(t, 6) for t in window.times]
+        [0.0, 0.00625, 0.0125, 0.01875]
+        """
         amplitudes = np.asarray(amplitudes, dtype=float)
         times = np.arange(amplitudes.size) * ts if ts is not None else np.asarray(times, dtype=float)
         vibration, smooth, accel, score = (float(x[0]) for x in self.measures(times[None], amplitudes[None], max_freq))

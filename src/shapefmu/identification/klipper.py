@@ -162,7 +162,16 @@ def normalize_psd(freq, psd) -> np.ndarray:
 def read_spectrum_file(path) -> dict[str, Spectrum]:
     """The data sets of a Klipper resonances or calibration_data file as Klipper judges them (module
     docstring): for a ``psd_xyz`` file, ``xyz`` (what Klipper scores) and ``x``, ``y``, ``z``; otherwise
-    one per named data set. Each is normalised unless the header holds ``,shapers:``."""
+    one per named data set. Each is normalised unless the header holds ``,shapers:``.
+
+    >>> import pathlib, tempfile
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = pathlib.Path(folder) / "resonances_x.csv"
+    ...     _ = path.write_text("freq,psd_x,psd_y,psd_z,psd_xyz\\n10.0,1,0,0,1\\n20.0,2,0,0,2\\n")
+    ...     sets = read_spectrum_file(path)
+    >>> sorted(sets), [round(float(p), 6) for p in sets["xyz"].psd]  # 1 / 10.1 and 2 / 20.1
+    (['x', 'xyz', 'y', 'z'], [0.09901, 0.099502])
+    """
     from shapefmu.identification.recordings import read_bytes
 
     name = os.fspath(path)
@@ -210,7 +219,15 @@ def read_spectrum_file(path) -> dict[str, Spectrum]:
 
 def recording_psd(recording, axis="xyz") -> Spectrum:
     """Klipper's normalised spectrum of a recording's samples (module docstring): ``xyz`` sums every
-    recorded axis, as Klipper does; a single axis or direction takes those samples alone."""
+    recorded axis, as Klipper does; a single axis or direction takes those samples alone.
+
+    >>> from shapefmu.identification.recordings import Recording
+    >>> t = np.arange(4 * 3200) / 3200
+    >>> spectrum = recording_psd(Recording("sine", "table", 3200.0, {"x": np.sin(2 * np.pi * 40 * t)}, "mm/s^2"))
+    >>> bin_width = spectrum.freq[1] - spectrum.freq[0]  # 3200 Hz over 2048 samples
+    >>> round(float(bin_width), 3), bool(abs(spectrum.freq[np.argmax(spectrum.psd)] - 40) < bin_width / 2)
+    (1.563, True)
+    """
     from scipy.signal import welch
 
     from shapefmu.identification.spectra import axis_samples
@@ -237,7 +254,14 @@ def recording_psd(recording, axis="xyz") -> Spectrum:
 def judged_spectra(recording, source) -> list[Spectrum]:
     """The spectra Klipper judges shapers on, whatever axis the test moved: of a recording's samples,
     every recorded axis summed (``recording_psd``); of a spectrum file (``recording`` None), its psd_xyz,
-    or each of its data sets (the worst of them counts)."""
+    or each of its data sets (the worst of them counts).
+
+    >>> from shapefmu.identification.recordings import Recording
+    >>> t = np.arange(4 * 3200) / 3200
+    >>> moved = {"x": np.sin(2 * np.pi * 40 * t), "y": np.zeros(t.size), "z": np.zeros(t.size)}
+    >>> [s.axis for s in judged_spectra(Recording("sine", "table", 3200.0, moved, "mm/s^2"), "sine")]
+    ['xyz']
+    """
     if recording is not None:
         return [recording_psd(recording, "xyz")]
     sets = read_spectrum_file(source)
@@ -258,13 +282,24 @@ class Fitted:
 
 def scan_frequencies(name: str) -> np.ndarray:
     """The frequencies Klipper tries for shaper ``name``: from its lowest in 0.2 Hz steps below 150 Hz
-    (numpy's arange, as Klipper builds them, to the last bit)."""
+    (numpy's arange, as Klipper builds them, to the last bit).
+
+    >>> scan_frequencies("zv")[:3].tolist(), scan_frequencies("zv").size  # (150 - 21) / 0.2
+    ([21.0, 21.2, 21.4], 645)
+    """
     return np.arange(SHAPERS[name].min_freq, MAX_SHAPER_FREQ, FREQ_STEP)
 
 
 def fit(judge, name: str, freqs=None, damping_ratio: float = DEFAULT_DAMPING_RATIO) -> tuple[Fitted, list[Fitted]]:
     """Klipper's scan of shaper ``name`` over ``freqs`` (default ``scan_frequencies``) judged by
-    ``judge`` (a ``judge.Judge``): (the frequency Klipper chooses, every frequency from the highest)."""
+    ``judge`` (a ``judge.Judge``): (the frequency Klipper chooses, every frequency from the highest).
+
+    >>> from shapefmu.identification.judge import Judge
+    >>> freq = np.arange(1.0, 101.0)
+    >>> chosen, scanned = fit(Judge([(freq, np.exp(-((freq - 40) / 3) ** 2))]), "zv")  # a peak at 40 Hz
+    >>> round(chosen.freq), len(scanned)  # ZV's zero on the peak
+    (40, 645)
+    """
     freqs = scan_frequencies(name) if freqs is None else np.asarray(freqs, dtype=float)
     shaper = SHAPERS[name]
     designs = [shaper.impulses(f, damping_ratio) for f in freqs[::-1]]
@@ -284,7 +319,14 @@ def fit(judge, name: str, freqs=None, damping_ratio: float = DEFAULT_DAMPING_RAT
 
 def pick(judge, damping_ratio: float = DEFAULT_DAMPING_RATIO) -> tuple[Fitted, tuple[Fitted, ...]]:
     """Klipper's recommendation on ``judge``'s spectra (module docstring): (the pick, the shaper
-    chosen for each of zv, mzv, ei, 2hump_ei, 3hump_ei)."""
+    chosen for each of zv, mzv, ei, 2hump_ei, 3hump_ei).
+
+    >>> from shapefmu.identification.judge import Judge
+    >>> freq = np.arange(1.0, 101.0)
+    >>> best, chosen = pick(Judge([(freq, np.exp(-((freq - 40) / 3) ** 2))]))  # a peak at 40 Hz
+    >>> [c.name for c in chosen], best.name in AUTOTUNE
+    (['zv', 'mzv', 'ei', '2hump_ei', '3hump_ei'], True)
+    """
     best, chosen = None, []
     for name in AUTOTUNE:
         shaper, results = fit(judge, name, damping_ratio=damping_ratio)

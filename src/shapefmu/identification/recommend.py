@@ -65,6 +65,7 @@ class Recommendation:
     designs_scored: int
 
     def to_json(self) -> dict:
+        """The recommendation as ``--json`` prints it (``recommend``'s example shows its keys)."""
         return {"firmware": self.firmware, "pick": self.pick.row(), "klipper_pick": self.klipper_pick.row(),
                 "verdict": self.verdict, "candidates": [c.row() for c in self.candidates],
                 "left_out": list(self.left_out),
@@ -87,7 +88,12 @@ def _unusable(mode: Mode) -> str | None:
 
 def check_modes(modes) -> tuple[Mode, ...]:
     """``modes`` if a recommendation can be made for every one (each in ``MODE_FREQ`` Hz with a damping
-    ratio in [0, 1)), else a one-line error naming the value."""
+    ratio in [0, 1)), else a one-line error naming the value.
+
+    >>> check_modes([Mode(0.5, 0.05, 0.1, 0.01, 1.0, "spectrum fit")])
+    Traceback (most recent call last):
+    ValueError: mode frequency must be in [1, 1000] Hz, got 0.5
+    """
     modes = tuple(modes)
     if not modes:
         raise ValueError("recommend needs at least one mode")
@@ -98,7 +104,12 @@ def check_modes(modes) -> tuple[Mode, ...]:
 
 
 def usable_modes(modes) -> tuple[tuple[Mode, ...], tuple[str, ...]]:
-    """(the identified modes a recommendation can be made for, why each other one is set aside)."""
+    """(the identified modes a recommendation can be made for, why each other one is set aside).
+
+    >>> kept, why = usable_modes([Mode(40.0, 0.05, 0.1, 0.01, 1.0, "fit"), Mode(40.0, 1.5, 0.1, 0.01, 1.0, "fit")])
+    >>> [m.zeta for m in kept], why
+    ([0.05], ('the mode at 40.00 Hz is set aside: mode damping ratio must be in [0, 1), got 1.5',))
+    """
     kept = tuple(m for m in modes if not _unusable(m))
     return kept, tuple(f"the mode at {float(m.frequency):.2f} Hz is set aside: {_unusable(m)}" for m in modes
                        if _unusable(m))
@@ -175,7 +186,17 @@ def recommend(spectra, modes, *, firmware_name: str = "fmu", axes=("x",),
               max_freq: float = metrics.MAX_FREQ, ts: float = DEFAULT_TS, progress=None) -> Recommendation:
     """Klipper's pick and the pick for ``firmware_name`` on ``spectra`` (``Spectrum`` objects judged as
     Klipper judges, e.g. ``klipper.read_spectrum_file``) for the identified ``modes``; module docstring.
-    ``axes`` name the axes in the firmware lines; ``max_freq`` is Klipper's (200 Hz, or its --max_freq)."""
+    ``axes`` name the axes in the firmware lines; ``max_freq`` is Klipper's (200 Hz, or its --max_freq).
+
+    >>> from shapefmu.identification.spectra import Spectrum
+    >>> freq = np.arange(1.0, 101.0)
+    >>> peak = Spectrum("example", "x", freq, np.exp(-((freq - 40) / 3) ** 2), "a peak at 40 Hz")
+    >>> advice = recommend([peak], [Mode(40.0, 0.05, 0.1, 0.01, 1.0, "fit")], firmware_name="klipper")
+    >>> advice.pick.same(advice.klipper_pick), advice.pick.line.splitlines()[1]  # its six: Klipper's pick
+    (True, 'shaper_type_x: mzv')
+    >>> sorted(advice.to_json())
+    ['candidates', 'firmware', 'klipper_pick', 'left_out', 'modes', 'pick', 'settings', 'verdict']
+    """
     spectra = list(spectra)
     modes = tuple(modes)
     _check(spectra, modes, firmware_name, accel, scv, max_smoothing, ts)
@@ -262,6 +283,13 @@ def _batches(target, judge, reference, modes, top, axes, ts, left_out, say) -> l
 
 
 def remaining_curve(candidate: Candidate, freq, dampings) -> np.ndarray:
-    """V(f) of a candidate, worst over ``dampings``: the share of each frequency's vibration it leaves."""
+    """V(f) of a candidate, worst over ``dampings``: the share of each frequency's vibration it leaves.
+
+    >>> from shapefmu.identification.judge import Judge
+    >>> zv = Judge([(np.arange(1.0, 101.0), np.ones(100))]).candidate("zv", "single", (40.0,), (0.0,), [0.0, 0.0125],
+    ...                                                              [0.5, 0.5])
+    >>> [round(float(v), 6) for v in remaining_curve(zv, [20.0, 40.0], (0.0,))]  # |1 + e^(i pi / 2)| / 2, 0
+    [0.707107, 0.0]
+    """
     return metrics.residual(np.asarray(candidate.times)[None], np.asarray(candidate.amplitudes)[None],
                             freq, dampings).max(axis=-1)[0]

@@ -18,8 +18,12 @@ any spectrum is taken (Klipper's timestamps jitter by a few percent); the jitter
 longer than twice the mean) and the clipped samples (runs at the channel's extreme value, a saturated
 sensor) are counted and reported, so a user can judge the recording.
 
-Files are bounded before they are read: at most ``MAX_RECORDING_BYTES`` (the memory of a parsed
-table is about that of the file), and every error names the file, the line and what was expected.
+Files are bounded before they are parsed: at most ``MAX_RECORDING_BYTES``, at most
+``MAX_RECORDING_VALUES`` numbers (rows times columns, counted from the lines or from a Parquet file's
+metadata: a small compressed file can hold millions of rows), at most ``MAX_COLUMNS`` columns asked
+for; every number read has a magnitude of at most ``MAX_MAGNITUDE`` (so that no square or sum in a
+spectrum overflows) and rates are at most ``MAX_RATE``. Every error names the file, the line and
+what was expected. A UTF-8 byte-order mark at the start is skipped.
 """
 
 from __future__ import annotations
@@ -38,11 +42,20 @@ AXES = ("x", "y", "z")
 # Read, decoded and parsed, a CSV costs about three times its size; 64 MB keeps a read under 500 MB
 # and holds 30 minutes of three axes at 3.2 kHz (a resonance test takes one or two).
 MAX_RECORDING_BYTES = 64 * 2**20
+MAX_RECORDING_VALUES = 2**24  # 128 MB of float64: 20 minutes of time and three axes at 3.2 kHz
+MAX_COLUMNS = 16
+MAX_MAGNITUDE = 1e100  # squared and summed over a segment, still far from overflow
+MAX_RATE = 1e6  # Hz: above any accelerometer's rate
+MAX_OVERFLOWS = 10**12
+BOM = b"\xef\xbb\xbf"
+NEWLINE = b"\n"
+# A number as NumPy's CSV reader takes it (Python's float() would also take '1_234', which it refuses)
+_NUMBER = re.compile(r"^\s*[+-]?(?:(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?|nan|inf|infinity)\s*$", re.IGNORECASE)
 KLIPPER_RAW = "klipper-raw"
 KLIPPER_SPECTRUM = "klipper-spectrum"
 RRF_M956 = "rrf-m956"
 TABLE = "table"
-_RRF_RATE = re.compile(r"^\s*rate\s*[:=]?\s*([0-9.eE+-]+)\s*(?:hz)?\s*,?\s*overflows\s*[:=]?\s*(\d+)\s*$", re.IGNORECASE)
+_RRF_RATE = re.compile(r"^\s*rate\s*[:=]?\s*(\S*?)\s*(?:hz)?\s*,?\s*overflows\s*[:=]?\s*(\S*)\s*$", re.IGNORECASE)
 
 
 @dataclass(frozen=True)
@@ -80,7 +93,13 @@ class Recording:
 
 def read_bytes(path) -> bytes:
     """The content of a recording: refused in one line if it is not a regular file or is larger than
-    ``MAX_RECORDING_BYTES``."""
+    ``MAX_RECORDING_BYTES``.
+
+    >>> read_bytes("/")
+    Traceback (most recent call last):
+    ...
+    ValueError: /: a recording must be a regular file, not a folder
+    """
     name = os.fspath(path)
     try:  # without blocking: a FIFO with no writer would wait in open() forever
         with open(os.open(name, os.O_RDONLY | os.O_NONBLOCK), "rb") as stream:
@@ -99,7 +118,11 @@ def read_bytes(path) -> bytes:
 
 
 def detect(data: bytes) -> str:
-    """The format of a recording's content (see the module docstring), or ``TABLE``."""
+    """The format of a recording's content (see the module docstring), or ``TABLE``.
+
+    >>> detect(b"#time,accel_x,accel_y,accel_z\\n"), detect(b"Sample,X,Y\\n"), detect(b"t,a\\n")
+    ('klipper-raw', 'rrf-m956', 'table')
+    """
     if data[:4] == b"PAR1":
         return TABLE
     first = data.split(b"\n", 1)[0].strip().lower().replace(b" ", b"")
@@ -121,11 +144,16 @@ def _text(data: bytes, name: str) -> str:
 
 
 def parse_table(data: bytes, name: str, *, first_line: int = 1) -> tuple[list[str], np.ndarray]:
-    """(column names, rows x columns float array) of a CSV with one header line. Blank lines and
+    r"""(column names, rows x columns float array) of a CSV with one header line. Blank lines and
     lines starting with ``#`` after the header are skipped. Every row must hold as many numbers as
-    the header has names; the first one that does not is named by its line. The rows are parsed by
-    NumPy straight from the bytes (no decoded copy, no list of lines): a read costs about three times
-    the file's size in memory."""
+    the header has names, each of magnitude at most ``MAX_MAGNITUDE``; the first one that does not is
+    named by its line. The rows are counted before they are parsed (at most ``MAX_RECORDING_VALUES``
+    numbers), then parsed by NumPy straight from the bytes (no decoded copy, no list of lines).
+
+    >>> parse_table(b"t,a\n0,1.5\n# a comment\n0.1,-2\n", "f.csv")
+    (['t', 'a'], array([[ 0. ,  1.5],
+           [ 0.1, -2. ]]))
+    """
     header_bytes, _, body = data.partition(b"\n")
     header = _text(header_bytes, name)
     if not header.strip():
@@ -133,6 +161,11 @@ def parse_table(data: bytes, name: str, *, first_line: int = 1) -> tuple[list[st
     names = [c.strip() for c in header.split(",")]
     if any(not c for c in names):
         raise ValueError(f"{name}: line {first_line}: expected column names separated by commas, got {header[:80]!r}")
+    rows = body.count(b"\n") + 1
+    if rows * len(names) > MAX_RECORDING_VALUES:
+        raise ValueError(f"{name}: up to {rows} rows of {len(names)} columns are more than the {MAX_RECORDING_VALUES} "
+                         f"numbers (shapefmu.identification.recordings.MAX_RECORDING_VALUES) read at once; cut the "
+                         f"recording into shorter ones")
     if not any(line.strip() and not line.lstrip().startswith(b"#") for line in io.BytesIO(body)):
         raise ValueError(f"{name}: line {first_line + 1}: expected rows of numbers after the header, got none")
     try:
@@ -141,33 +174,31 @@ def parse_table(data: bytes, name: str, *, first_line: int = 1) -> tuple[list[st
         values = None
     if values is None or values.shape[1] != len(names):
         _name_the_bad_line(body, names, name, first_line)
-    bad = np.flatnonzero(~np.all(np.isfinite(values), axis=1))
+    bad = np.flatnonzero(~np.all(np.abs(values) <= MAX_MAGNITUDE, axis=1))
     if bad.size:
         _name_the_bad_line(body, names, name, first_line, row=int(bad[0]))
     return names, values
 
 
 def _name_the_bad_line(body: bytes, names, name: str, first_line: int, row: int | None = None):
-    """Raise the one-line error for the first malformed row (or data row ``row``, not finite)."""
+    """Raise the one-line error for the first malformed row (or data row ``row``, not finite or too
+    large)."""
     data_row = -1
+    expected = f"expected {len(names)} numbers ({', '.join(names)[:80]})"
     for number, raw in enumerate(io.BytesIO(body), start=first_line + 1):
         line = raw.decode("utf-8", "replace")
         if not line.strip() or line.lstrip().startswith("#"):
             continue
         data_row += 1
         fields = line.rstrip("\r\n").split(",")
-        try:
-            numbers = [float(f) for f in fields]
-        except ValueError:
-            raise ValueError(f"{name}: line {number}: expected {len(names)} numbers ({', '.join(names)}), "
-                             f"got {line.strip()[:80]!r}") from None
-        if len(numbers) != len(names):
-            raise ValueError(f"{name}: line {number}: expected {len(names)} numbers ({', '.join(names)}), "
-                             f"got {len(numbers)}")
+        if not all(_NUMBER.match(f) for f in fields):
+            raise ValueError(f"{name}: line {number}: {expected}, got {line.strip()[:80]!r}")
+        if len(fields) != len(names):
+            raise ValueError(f"{name}: line {number}: {expected}, got {len(fields)}")
         if data_row == row:
-            raise ValueError(f"{name}: line {number}: expected finite numbers, got {line.strip()[:80]!r} "
-                             f"(a NaN or infinite sample cannot be placed in a spectrum)")
-    raise ValueError(f"{name}: expected rows of {len(names)} numbers")
+            raise ValueError(f"{name}: line {number}: expected finite numbers of magnitude at most {MAX_MAGNITUDE:g}, "
+                             f"got {line.strip()[:80]!r} (no spectrum can be taken of it)")
+    raise ValueError(f"{name}: {expected} on every line after the header")
 
 
 def _uniform(time: np.ndarray, columns: np.ndarray, name: str, line_of) -> tuple[float, np.ndarray, float, int]:
@@ -180,6 +211,9 @@ def _uniform(time: np.ndarray, columns: np.ndarray, name: str, line_of) -> tuple
         raise ValueError(f"{name}: line {line_of(bad[0] + 1)}: expected the time to increase, got "
                          f"{time[bad[0] + 1]!r} after {time[bad[0]]!r}")
     mean = (time[-1] - time[0]) / (time.size - 1)
+    if mean * MAX_RATE < 1:  # not 1 / mean: a denormal step's rate is infinite
+        raise ValueError(f"{name}: the time column steps by {mean:g} s on average, a rate above {MAX_RATE:g} Hz; "
+                         f"expected steps of at least {1 / MAX_RATE:g} s")
     jitter = float(np.std(dt) / mean)
     gaps = int(np.count_nonzero(dt > 2.0 * mean))
     if jitter < 1e-9:
@@ -206,13 +240,23 @@ def _channels(names, columns, axis_names) -> dict[str, np.ndarray]:
 
 def read_recording(path, *, time_column: str | None = None, fs: float | None = None,
                    columns: list[str] | None = None):
-    """The ``Recording`` (or, for a Klipper processed-spectrum file, the ``Spectrum``) in ``path``.
+    r"""The ``Recording`` (or, for a Klipper processed-spectrum file, the ``Spectrum`` of each axis
+    by name) in ``path``.
 
     ``time_column`` or ``fs`` (Hz) and ``columns`` describe a generic CSV or Parquet table; they are
     refused for the formats that carry their own (the file's content says which it is).
+
+    >>> import pathlib, tempfile
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "m956.csv"
+    >>> rows = "".join(f"{i},{0.01 * (i % 7)}\n" for i in range(32))
+    >>> _ = path.write_text("\ufeffSample,X\n" + rows + "Rate 1000, overflows 0\n")
+    >>> read_recording(path).describe().split(": ", 1)[1]
+    'rrf-m956, x in mm/s^2, 32 samples at 1000.0 Hz (0.03 s), jitter 0.00 %, 0 gap(s), 0 clipped sample(s)'
     """
     name = os.fspath(path)
     data = read_bytes(path)
+    if data.startswith(BOM):
+        data = data[len(BOM):]
     if not data.strip():
         raise ValueError(f"{name}: line 1: expected a recording, got an empty file")
     kind = detect(data)
@@ -224,7 +268,7 @@ def read_recording(path, *, time_column: str | None = None, fs: float | None = N
     if kind == KLIPPER_SPECTRUM:
         from shapefmu.identification.spectra import klipper_spectrum
 
-        return klipper_spectrum(*parse_table(data, name), source=name)
+        return klipper_spectrum(*parse_table(_without_shaper_marker(data), name), source=name)
     if kind == KLIPPER_RAW:
         names, values = parse_table(data, name)
         axes = [n.lower().removeprefix("accel_") for n in names[1:]]
@@ -237,6 +281,20 @@ def read_recording(path, *, time_column: str | None = None, fs: float | None = N
     return _read_table(data, name, time_column, fs, columns)
 
 
+def _without_shaper_marker(data: bytes) -> bytes:
+    """A Klipper spectrum file without the empty ``shapers:`` column that newer Klipper writes between
+    the spectra and the shapers' responses (``freq,psd_x,...,psd_xyz,shapers:,zv(59.0),...``, rows
+    ``10.0,...,1.2e+03,,0.981,...``)."""
+    header, _, body = data.partition(b"\n")
+    columns = header.split(b",")
+    if b"shapers:" not in [c.strip() for c in columns]:
+        return data
+    at = [c.strip() for c in columns].index(b"shapers:")
+    rows = [b",".join(line.split(b",")[:at] + line.split(b",")[at + 1:]) if line.strip() else line
+            for line in body.split(b"\n")]
+    return b",".join(columns[:at] + columns[at + 1:]) + b"\n" + b"\n".join(rows)
+
+
 def _recording(name, kind, rate, channels, unit, jitter=0.0, gaps=0, overflows=0) -> Recording:
     clipped = sum(_clipped(c) for c in channels.values())
     return Recording(name, kind, float(rate), channels, unit, jitter, gaps, clipped, overflows)
@@ -245,22 +303,26 @@ def _recording(name, kind, rate, channels, unit, jitter=0.0, gaps=0, overflows=0
 def _read_rrf(data: bytes, name: str) -> Recording:
     body, _, last = data.rstrip().rpartition(b"\n")
     last_line = last.decode("utf-8", "replace")
+    line = f"{name}: line {body.count(NEWLINE) + 2}"
     match = _RRF_RATE.match(last_line)
     if match is None:
-        lines = data.rstrip().count(b"\n") + 1
-        raise ValueError(f"{name}: line {lines}: expected the last line of an M956 recording, "
-                         f"'Rate <Hz>, overflows <n>', got {last_line[:80]!r}")
-    rate, overflows = float(match.group(1)), int(match.group(2))
-    if not (math.isfinite(rate) and rate > 0):
-        lines = data.rstrip().count(b"\n") + 1
-        raise ValueError(f"{name}: line {lines}: expected a positive rate in Hz, got {match.group(1)!r}")
+        raise ValueError(f"{line}: expected the last line of an M956 recording, 'Rate <Hz>, overflows <n>', "
+                         f"got {last_line[:80]!r}")
+    rate_text, overflow_text = match.group(1), match.group(2)
+    rate = float(rate_text) if _NUMBER.match(rate_text) else math.nan
+    if not 0 < rate <= MAX_RATE:
+        raise ValueError(f"{line}: expected the M956 'Rate' in (0, {MAX_RATE:g}] Hz, got {rate_text[:20]!r}")
+    if not (overflow_text.isdigit() and len(overflow_text) <= 13 and int(overflow_text) <= MAX_OVERFLOWS):
+        shown = overflow_text[:20] + (f"... ({len(overflow_text)} characters)" if len(overflow_text) > 20 else "")
+        raise ValueError(f"{line}: expected the overflow count as a whole number in [0, {MAX_OVERFLOWS}], got {shown!r}")
     names, values = parse_table(body, name)
     axes = [n.lower() for n in names[1:]]
     if len(set(axes)) != len(axes):
         raise ValueError(f"{name}: line 1: an axis is named twice in {','.join(names)!r}")
     if values.shape[0] < 16:
         raise ValueError(f"{name}: expected at least 16 samples for a spectrum, got {values.shape[0]}")
-    return _recording(name, RRF_M956, rate, _channels(names, values[:, 1:] * G, axes), "mm/s^2", overflows=overflows)
+    return _recording(name, RRF_M956, rate, _channels(names, values[:, 1:] * G, axes), "mm/s^2",
+                      overflows=int(overflow_text))
 
 
 def _read_table(data: bytes, name: str, time_column, fs, columns) -> Recording:
@@ -268,20 +330,26 @@ def _read_table(data: bytes, name: str, time_column, fs, columns) -> Recording:
         first = data.split(b"\n", 1)[0][:60].decode("utf-8", "replace")
         raise ValueError(f"{name}: not a Klipper or RepRapFirmware recording (line 1: {first!r}); for any other CSV or "
                          f"Parquet table give --column NAME and --time COLUMN or --fs HZ")
+    if len(columns) > MAX_COLUMNS:
+        raise ValueError(f"--column: at most {MAX_COLUMNS} columns are read, got {len(columns)}")
+    twice = sorted({c for c in columns if columns.count(c) > 1})
+    if twice:
+        raise ValueError(f"--column {twice[0]!r} is given {columns.count(twice[0])} times; give each column once")
     if (time_column is None) == (fs is None):
         raise ValueError(f"{name}: give exactly one of --time COLUMN and --fs HZ for the samples' time base")
-    if fs is not None and not (math.isfinite(fs) and fs > 0):
-        raise ValueError(f"--fs must be a positive rate in Hz, got {fs!r}")
+    if fs is not None and not 0 < fs <= MAX_RATE:
+        raise ValueError(f"--fs must be a rate in (0, {MAX_RATE:g}] Hz, got {fs!r}")
+    wanted = [*columns, *([time_column] if time_column else [])]
     if data[:4] == b"PAR1":
-        names, values = _parquet(data, name)
+        names, values = _parquet(data, name, wanted)
         line_of = lambda i: f"row {i + 1} of"  # noqa: E731 -- Parquet has rows, not lines
     else:
         names, values = parse_table(data, name)
         line_of = lambda i: i + 2  # noqa: E731
     index = {n: i for i, n in enumerate(names)}
-    for wanted in [*columns, *([time_column] if time_column else [])]:
-        if wanted not in index:
-            raise ValueError(f"{name}: no column {wanted!r}; the columns are {', '.join(names)}")
+    for column in wanted:
+        if column not in index:
+            raise ValueError(f"{name}: no column {column!r}; the columns are {', '.join(names)[:200]}")
     picked = values[:, [index[c] for c in columns]]
     if time_column is not None:
         rate, uniform, jitter, gaps = _uniform(values[:, index[time_column]], picked, name, line_of)
@@ -292,12 +360,25 @@ def _read_table(data: bytes, name: str, time_column, fs, columns) -> Recording:
     return _recording(name, TABLE, rate, _channels(names, uniform, columns), "as recorded", jitter, gaps)
 
 
-def _parquet(data: bytes, name: str) -> tuple[list[str], np.ndarray]:
+def _parquet(data: bytes, name: str, wanted: list[str]) -> tuple[list[str], np.ndarray]:
+    """(names, values) of the numeric columns of a Parquet file among ``wanted``, bounded by its
+    metadata (rows times columns) before any is read."""
     import pyarrow as pa
     import pyarrow.parquet as pq
 
     try:
-        table = pq.read_table(pa.BufferReader(data))
+        parquet = pq.ParquetFile(pa.BufferReader(data))
+        available = parquet.schema_arrow.names
+        for column in wanted:
+            if column not in available:
+                raise ValueError(f"{name}: no column {column!r}; the columns are {', '.join(available)[:200]}")
+        present = list(dict.fromkeys(wanted))
+        rows = parquet.metadata.num_rows
+        if rows * len(present) > MAX_RECORDING_VALUES:
+            raise ValueError(f"{name}: {rows} rows of {len(present)} column(s) are more than the {MAX_RECORDING_VALUES} "
+                             f"numbers (shapefmu.identification.recordings.MAX_RECORDING_VALUES) read at once; cut "
+                             f"the recording into shorter ones")
+        table = parquet.read(columns=present)
     except (pa.ArrowException, OSError) as error:
         raise ValueError(f"{name}: not a readable Parquet file ({str(error)[:120]})") from None
     names, arrays = [], []
@@ -307,10 +388,12 @@ def _parquet(data: bytes, name: str) -> tuple[list[str], np.ndarray]:
             names.append(column)
         except (TypeError, ValueError, pa.ArrowException):
             continue  # a text column: not a signal
-    if not arrays:
-        raise ValueError(f"{name}: the Parquet file has no numeric column")
+    if len(arrays) < len(present):
+        text = sorted(set(present) - set(names))[0]
+        raise ValueError(f"{name}: column {text!r} holds no numbers")
     values = np.column_stack(arrays)
-    bad = np.flatnonzero(~np.all(np.isfinite(values), axis=1))
+    bad = np.flatnonzero(~np.all(np.abs(values) <= MAX_MAGNITUDE, axis=1))
     if bad.size:
-        raise ValueError(f"{name}: row {bad[0] + 1}: expected finite numbers in every numeric column")
+        raise ValueError(f"{name}: row {bad[0] + 1}: expected finite numbers of magnitude at most {MAX_MAGNITUDE:g} "
+                         f"in every column read")
     return names, values
