@@ -23,6 +23,7 @@ FIXTURES = {
     "ProfileGenerator": "profile_fmu",
     "EKFTuner": "ekf_fmu",
     "STOSController": "stos_fmu",
+    "ScheduledShaper": "scheduled_zv_fmu",
 }
 # Random sequences per FMU: enough to reach every phase, few enough to keep all FMUs within seconds.
 EXAMPLES = 25

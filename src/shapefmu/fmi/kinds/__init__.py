@@ -20,6 +20,7 @@ KINDS = {
     "ProfileGenerator": "profile_generator",
     "EKFTuner": "ekf_tuner",
     "STOSController": "stos_controller",
+    "ScheduledShaper": "scheduled_shaper",
 }
 
 
