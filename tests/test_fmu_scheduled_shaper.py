@@ -65,12 +65,12 @@ def test_a_command_at_rest_does_not_move_when_the_design_changes(scheduled_zv_fm
 
 
 def player(tmp_path, name, samples):
-    """A ReferencePlayer FMU holding samples[k] around k Ts (switches half a sample before)."""
+    """A ReferencePlayer FMU holding samples[k] around k Ts (each switch half a sample before)."""
     from shapefmu.fmi import build_fmu
 
+    changes = np.flatnonzero(np.diff(samples)) + 1
     table = {"kind": "signal_table", "interpolation": "hold", "before": float(samples[0]),
-             "time": [(k - 0.5) * TS for k in range(1, len(samples))] or [0.0],
-             "value": [float(v) for v in samples[1:]] or [float(samples[0])]}
+             "time": [(k - 0.5) * TS for k in changes], "value": [float(samples[k]) for k in changes]}
     return build_fmu("ReferencePlayer", tmp_path / f"{name}.fmu", table=json.dumps(table))
 
 

@@ -8,17 +8,16 @@ received; the plant FMU's own ringing after each move, fitted with the true mode
 against the same move unshaped; the shaper FMU run in fmpy on the same inputs (second host).
 """
 
-import json
 import math
 
 import numpy as np
 import pytest
+from test_fmu_scheduled_shaper import TS, player, run_fmpy
 
 from shapefmu.fmi.kinds.scheduled_shaper import schedule_start_values
 from shapefmu.plants import load_scheduled
 
-FS = 2000.0
-TS = 1.0 / FS
+FS = 1.0 / TS
 MOVES = 8
 # One move: 20 ms at 5 m/s^2, 100 ms coasting, 20 ms braking, 200 ms at rest (benchmarks/moving_mode.py),
 # after 5 ms at rest: the master passes the players' outputs on from its first step, so the command at
@@ -55,21 +54,11 @@ def ring_amplitude(deflection, omega, zeta):
     return math.hypot(a, b)
 
 
-def player(tmp_path, name, samples):
-    """A ReferencePlayer FMU holding samples[k] around k Ts (switches half a sample before)."""
-    from shapefmu.fmi import build_fmu
-
-    changes = np.flatnonzero(np.diff(samples)) + 1
-    table = {"kind": "signal_table", "interpolation": "hold", "before": float(samples[0]),
-             "time": [(k - 0.5) * TS for k in changes], "value": [float(samples[k]) for k in changes]}
-    return build_fmu("ReferencePlayer", tmp_path / f"{name}.fmu", table=json.dumps(table))
-
-
 @pytest.fixture(scope="module")
 def loop(tmp_path_factory):
     """The loop run in our master (Gauss-Seidel, its default), twice: shaped (ScheduledShaper FMU) and unshaped (the command
     straight to the bed): {"shaped": (command the bed got, its deflection), "unshaped": (...)}, the
-    shaper FMU and its start values."""
+    shaper FMU."""
     from shapefmu.cosim.master import simulate
     from shapefmu.fmi import build_fmu
     from shapefmu.fmi.native import build_plant_fmu, model_from_file
@@ -97,14 +86,14 @@ def loop(tmp_path_factory):
         # row k of the bed's input is the shaped command of sample k.
         result = simulate(system, (commands.size - 1) * TS, TS, record=["bed.acceleration", "bed.bed_deflection"])
         runs[name] = (np.asarray(result["bed.acceleration"], float), np.asarray(result["bed.bed_deflection"], float))
-    return runs, shaper, starts
+    return runs, shaper
 
 
 def test_the_scheduled_shaper_fmu_leaves_under_one_percent_through_the_drift(loop):
     """Worst residual per move of the command the plant FMU received, from the closed form of the true
     mode of each move's load; the design layer's scheduled shaper (three rows, benchmarks/moving_mode.py)
     leaves 0.3 % there, a fixed ZV 17.9 %."""
-    runs, _, _ = loop
+    runs, _ = loop
     bed = load_scheduled("printer_bed")
     commands, values, starts = moves()
     shaped = runs["shaped"][0]
@@ -124,7 +113,7 @@ def test_the_plant_fmus_ringing_after_each_move_is_the_closed_form_residual(loop
     shaped one, a ZV of at most 19 ms, has stopped too), fitted with its true mode: shaped over unshaped at
     the window's start is the closed-form ratio there, to what is left of the move before (a residual of
     0.3 % decays by e^(-zeta omega 340 ms) = 4 % into the next move: 1.2e-4 of the unshaped ringing)."""
-    runs, _, _ = loop
+    runs, _ = loop
     bed = load_scheduled("printer_bed")
     commands, values, starts = moves()
     rest = ONE.size - 390
@@ -142,15 +131,6 @@ def test_the_plant_fmus_ringing_after_each_move_is_the_closed_form_residual(loop
 
 def test_the_shaper_fmu_gives_the_same_command_in_fmpy(loop):
     """Second host: fmpy fed the same samples gives, at every sample, the command the plant got in our master."""
-    from support.fmpy_slaves import initialised
-
-    runs, shaper, _ = loop
+    runs, shaper = loop
     commands, values, _ = moves()
-    slave, vr = initialised(shaper)
-    y = []
-    for k, (a, s) in enumerate(zip(commands, values)):
-        slave.setReal([vr["u"], vr["scheduling"]], [float(a), float(s)])
-        y.append(slave.getReal([vr["y"]])[0])
-        slave.doStep(k * TS, TS)
-    slave.freeInstance()
-    np.testing.assert_allclose(y, runs["shaped"][0], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(run_fmpy(shaper, commands, values), runs["shaped"][0], rtol=0, atol=1e-12)
