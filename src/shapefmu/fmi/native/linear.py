@@ -64,14 +64,12 @@ class _Parameters:
     def _make(self, name: str, value: float, unit: str, constraint: str, factor: float, rate: float = 0.0) -> ca.SX:
         symbol = ca.SX.sym(name)
         description = self.descriptions.get(name.split("[")[0]) or f"parameter {name} of the {self.plant.kind} model"
-        if rate:
+        if rate:  # the value at the input's start, moved by the file's affine law
             s = self.scheduling
             description += (f" at {s.name} = {s.start:g} {s.unit}; it changes by {rate:g} {unit} per {s.unit} "
                             f"of the input {s.name}")
-            self.scalars.append(ScalarParameter(name, symbol, float(value), unit, self.tunable, constraint, description))
-            return factor * (symbol + rate * self._shift)
         self.scalars.append(ScalarParameter(name, symbol, float(value), unit, self.tunable, constraint, description))
-        return factor * symbol
+        return factor * (symbol + rate * self._shift) if rate else factor * symbol
 
     def _rates(self, name: str, size: int | None) -> tuple[float, ...]:
         """The change per unit of the scheduling input of each entry of parameter ``name`` (0 without one)."""
