@@ -21,6 +21,7 @@ KINDS = {
     "EKFTuner": "ekf_tuner",
     "STOSController": "stos_controller",
     "ScheduledShaper": "scheduled_shaper",
+    "TrackedShaper": "tracked_shaper",
 }
 
 

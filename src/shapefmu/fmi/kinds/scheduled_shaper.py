@@ -25,7 +25,7 @@ from ...runtime.checks import check_count, check_finite, check_positive, check_v
 from ...runtime.sample_clock import SampleClock, samples_per_python_step
 from ...runtime.scheduled_shaper import CommandSegment, ModeFollowingShaper, ModeSchedule, ScheduledShaperKernel
 from ...runtime.shaper_designs import KINDS
-from .interface import Interface, input_, output, parameter, sampled_description
+from .interface import Interface, input_, output, parameter, redesigned_shaper_parameters, sampled_description
 from .model import Model as _Model
 
 MAX_ROWS = 8
@@ -57,9 +57,7 @@ INTERFACE = Interface(
         "re-design", "u and scheduling"
     ),
     (
-        parameter("kind", "zv", f"shaper design, a single-mode kind: {', '.join(k for k in KINDS if k != 'simultaneous')}"),
-        parameter("n", 1, "derivative order of zv_dn (0 = ZV, 1 = ZVD, ...)", minimum=0),
-        parameter("vtol", 0.05, "tolerable residual vibration of ei, ei2, ei3, in (0, 0.25]", maximum=0.25),
+        *redesigned_shaper_parameters(KINDS),
         parameter("n_rows", MAX_ROWS, f"rows of the schedule used, 1..{MAX_ROWS}", minimum=1, maximum=MAX_ROWS),
         *_rows(),
         parameter("extrapolate", False, "continue the end rows beyond the table (a linear law) instead of holding them"),
