@@ -64,13 +64,13 @@ def test_a_command_at_rest_does_not_move_when_the_design_changes(scheduled_zv_fm
     assert np.all(y[120:] == y[-1]) and y[-1] == pytest.approx(1.0, abs=1e-15)
 
 
-def player(tmp_path, name, samples):
-    """A ReferencePlayer FMU holding samples[k] around k Ts (each switch half a sample before)."""
+def player(tmp_path, name, samples, ts=TS):
+    """A ReferencePlayer FMU holding samples[k] around k ts (each switch half a sample before)."""
     from shapefmu.fmi import build_fmu
 
     changes = np.flatnonzero(np.diff(samples)) + 1
     table = {"kind": "signal_table", "interpolation": "hold", "before": float(samples[0]),
-             "time": [(k - 0.5) * TS for k in changes], "value": [float(samples[k]) for k in changes]}
+             "time": [(k - 0.5) * ts for k in changes], "value": [float(samples[k]) for k in changes]}
     return build_fmu("ReferencePlayer", tmp_path / f"{name}.fmu", table=json.dumps(table))
 
 

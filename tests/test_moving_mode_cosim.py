@@ -32,13 +32,13 @@ def moves():
     return commands, np.repeat(LOADS, ONE.size), np.arange(MOVES) * ONE.size
 
 
-def vibration_left(command, omega, zeta, at=None):
-    """Amplitude of the mode's vibration after the held command's steps a_i at t_i = i Ts, at time ``at``
+def vibration_left(command, omega, zeta, at=None, fs=FS):
+    """Amplitude of the mode's vibration after the held command's steps a_i at t_i = i / fs, at time ``at``
     (default: its last step t_N, Singer & Seering's, paper 000 eq. 5 without the normalisation):
     |sum_i a_i e^{-zeta omega (at - t_i)} e^{j omega_d t_i}|."""
     steps = np.diff(command, prepend=0.0)
     moving = np.flatnonzero(np.abs(steps) > 1e-9 * np.abs(steps).max())
-    t, a = moving / FS, steps[moving]
+    t, a = moving / fs, steps[moving]
     at = t[-1] if at is None else at
     return abs(np.sum(a * np.exp(-zeta * omega * (at - t) + 1j * omega * math.sqrt(1.0 - zeta**2) * t)))
 
