@@ -15,7 +15,7 @@ import pytest
 from shapefmu.fmi import build_fmu
 from shapefmu.fmi.kinds import KINDS
 from shapefmu.fmi.native import build_plant_fmu, model_from_file
-from shapefmu.fmi.native.twins import build_native
+from shapefmu.fmi.native.twins import TWINS, build_native
 from shapefmu.plants.shipped import shipped
 
 PLANTS = [path.stem for path in shipped((".toml", ".py"))]
@@ -26,7 +26,7 @@ def built(tmp_path_factory):
     """{label: FMU path}: every kind as a pythonfmu FMU and as its FMI 3.0 native twin, every shipped plant."""
     folder = tmp_path_factory.mktemp("described")
     fmus = {f"pythonfmu {name}": build_fmu(name, folder / f"{name}.fmu") for name in KINDS}
-    fmus |= {f"native3 {name}": build_native(name, folder / f"{name}3.fmu", fmi_version="3.0") for name in KINDS}
+    fmus |= {f"native3 {name}": build_native(name, folder / f"{name}3.fmu", fmi_version="3.0") for name in TWINS}
     for name in PLANTS:
         model = model_from_file(name)
         fmus[f"plant {name}"] = build_plant_fmu(model, folder / f"{name}.fmu")
@@ -106,7 +106,7 @@ def _icon(fmu):
 def test_each_kind_and_plant_has_an_icon_of_its_own(built):
     icons = {label: _icon(fmu) for label, fmu in built.items() if not label.startswith("native3")}
     assert len(set(icons.values())) == len(icons)
-    for name in KINDS:  # the twin draws what its pythonfmu FMU draws: the same design
+    for name in TWINS:  # the twin draws what its pythonfmu FMU draws: the same design
         assert _icon(built[f"native3 {name}"]) == icons[f"pythonfmu {name}"]
 
 

@@ -24,6 +24,8 @@ FIXTURES = {
     "ProfileGenerator": "profile_fmu",
     "EKFTuner": "ekf_fmu",
     "STOSController": "stos_fmu",
+    "ScheduledShaper": "scheduled_zv_fmu",
+    "TrackedShaper": "tracked_fmu",
 }
 # Random sequences per FMU: enough to reach every phase, few enough to keep all FMUs within seconds.
 EXAMPLES = 25

@@ -21,12 +21,12 @@ from support.valgrind import requires_valgrind, run_driver_under_valgrind
 pytestmark = [pytest.mark.foreign, requires_valgrind]
 
 
-@pytest.mark.parametrize("name", ["disk_drive", "pendulum"])
+@pytest.mark.parametrize("name", ["disk_drive", "pendulum", "printer_bed"])
 def test_a_plant_leaks_nothing_and_touches_no_invalid_memory(plant_fmus, tmp_path, name):
     run_driver_under_valgrind(plant_fmus[name], "valgrind_plant", tmp_path)
 
 
-@pytest.mark.parametrize("model", ["disk_drive.toml", "pendulum.py"])
+@pytest.mark.parametrize("model", ["disk_drive.toml", "pendulum.py", "printer_bed.toml"])
 def test_an_fmi3_plant_leaks_nothing_and_touches_no_invalid_memory(builds, tmp_path, model):
     run_driver_under_valgrind(builds.plant(MODELS / model, fmi_version="3.0"), "valgrind_plant3", tmp_path)
 

@@ -181,3 +181,17 @@ def test_a_command_or_value_that_is_not_a_number_is_refused_naming_it():
         kernel.step(math.nan, 0.0)
     with pytest.raises(ValueError, match="scheduling value must be a finite real number, got inf"):
         kernel.step(0.0, math.inf)
+
+
+def test_the_output_given_before_a_sample_is_the_one_the_sample_gives():
+    """Feed-through: ``output(u, value)`` before the sample is what ``step(u, value)`` returns, under a
+    load that moves at every sample; and it is the reference's y[k], known before the sample."""
+    rng = np.random.default_rng(3)
+    u = np.cumsum(rng.normal(size=400)) * (rng.random(400) < 0.6)
+    values = np.clip(np.cumsum(rng.normal(0.0, 6.0, 400)) + 150.0, 0.0, 300.0)
+    kernel = ScheduledShaperKernel(FS, ModeSchedule(*BED), "zvd", value0=values[0], resolution=0.0)
+    before = []
+    for a, s in zip(u, values):
+        before.append(kernel.output(a, s))
+        assert kernel.step(a, s) == pytest.approx(before[-1], abs=1e-13)
+    np.testing.assert_allclose(before, change_by_change(u, 0.0, values, "zvd"), rtol=0, atol=1e-12)

@@ -14,6 +14,7 @@ from pathlib import Path
 
 from shapefmu.cli.arguments import examples, output_file, parse_mode, say_written
 from shapefmu.cli.progress import showing
+from shapefmu.cli.schedule import parse_schedule
 
 AXIS_CHOICES = ("x", "y", "z", "xyz")
 # Klipper's defaults (shapefmu.identification.metrics), repeated so that --help imports no SciPy
@@ -102,6 +103,8 @@ def _cmd_recommend(args) -> int:
 
     if bool(args.recording) == bool(args.mode):
         raise ValueError("give recordings or --mode HZ[:ZETA] (one or more), not both and not neither")
+    if args.schedule and args.mode:
+        raise ValueError("--schedule makes its table from recordings, one per value: give recordings, not --mode")
     if args.build and args.firmware != "fmu":
         raise ValueError(f"--build writes an FMU, the fmu target: give --firmware fmu, not {args.firmware}")
     if args.build:  # the .ssv written beside the FMU, checked before the work as --build itself is
@@ -115,6 +118,10 @@ def _cmd_recommend(args) -> int:
         found = _identify_all(args)
         for f in found:
             _print_identified(f, say)
+        if args.schedule:  # a scheduled shaper's table instead of one pick (cli/schedule.py)
+            from shapefmu.cli.schedule import run_schedule
+
+            return run_schedule(args, found, say)
         # judged as Klipper judges, on every accelerometer axis summed; --axis chose the modes and names the lines
         spectra = [s for f, path in zip(found, args.recording) for s in klipper.judged_spectra(f.recording, path)]
         modes, set_aside = usable_modes(_merged_modes([f.modes.modes for f in found]))
@@ -295,4 +302,8 @@ def register(commands) -> None:
     p.add_argument("--python", action="store_true", help="with --build: the pythonfmu FMU instead of the native one")
     p.add_argument("--fmi-version", choices=("2.0", "3.0"), default="2.0",
                    help="with --build: FMI version of the native FMU (default 2.0; 3.0: array parameters)")
+    p.add_argument("--schedule", type=parse_schedule, metavar="NAME=V1,V2,...",
+                   help="the recordings were made at these values of a scheduling input (one each, e.g. "
+                        "mass=100,500): print a scheduled shaper's table of their modes instead of a pick; "
+                        "--build writes its ScheduledShaper FMU (pythonfmu)")
     p.set_defaults(run=_cmd_recommend)

@@ -49,6 +49,13 @@ last impulse, its part is u[b_m] - c_m = c_{m+1} - c_m and the segment is folded
 sum is carried from sample to sample, so rounding does not accumulate however long the run, and a
 step costs one multiply-add per impulse of each design still in flight.
 
+Feed-through. In the sum above only the change commanded at sample k itself, du_k = u[k] - u[k - 1],
+reaches y[k] through the design in force at k, by its first impulse (every shaper has one at delay
+0): y[k] = r[k] + w_0^{(k)} du_k, where r[k], the output if the command holds at k, depends on the
+past commands and designs alone. So the output a new command and a new scheduling value will give
+at sample k is known before the sample is taken (``ModeFollowingShaper.output``), as an FMU whose
+inputs are set at a communication point must give it, without taking the sample twice.
+
 ``resolution`` sets when a new mode re-designs: when its frequency has moved by more than that
 fraction, or its damping ratio by more than that amount, from the design in force (a ZV shaper's
 residual grows like (pi/2) |d omega / omega|, so 1e-4 costs at most 0.016 %); 0 re-designs at
@@ -111,10 +118,9 @@ class ModeSchedule:
         return 2.0 * math.pi * frequency, zeta
 
 
-class _Segment:
-    """The changes of the command made under one design (module docstring, Computation)."""
-
-    __slots__ = ("taps", "start", "base", "end", "end_value", "moved", "reach")
+class CommandSegment:
+    """The changes of the command made under one design (module docstring, Computation). Plain
+    attributes, no __slots__: an FMU state stores a kernel as its ``__dict__`` (``fmi/python/state_codec``)."""
 
     def __init__(self, taps, start, base):
         self.taps = taps  # ((delay, weight), ...)
@@ -144,17 +150,21 @@ class ModeFollowingShaper:
         if self.resolution < 0.0:
             raise ValueError(f"resolution must be >= 0, got {resolution!r}")
         u0 = check_finite(u0, "u0")
-        self.mode = None
-        self.designs = 0
+        self._pending = None  # ((omega, zeta), taps) of the newest design, shared by output() and step()
         taps = self._taps(omega, zeta)
-        self._segments = [_Segment(taps, 0, u0)]
+        self.mode = (float(omega), float(zeta))
+        self.designs = 1
+        self._segments = [CommandSegment(taps, 0, u0)]
         self._k = 0  # the index of the next sample
         self._last = u0
         self._ring, self._mask = [u0], 0
         self._fit(self._segments[0].reach)
 
     def _taps(self, omega, zeta):
-        """The design for (omega, zeta) on the sample grid, as ((delay, weight), ...)."""
+        """The design for (omega, zeta) on the sample grid, as ((delay, weight), ...): designed once per
+        mode, so that ``output`` at a sample and the ``step`` that takes it share it."""
+        if self._pending is not None and self._pending[0] == (omega, zeta):
+            return self._pending[1]
         if aliased_modes([(omega, zeta)], self.h):
             raise ValueError(f"the mode omega = {omega:g} rad/s, zeta = {zeta:g} lies at or above the Nyquist "
                              f"frequency pi*fs = {math.pi * self.fs:g} rad/s: sampled at fs = {self.fs:g} Hz no "
@@ -164,9 +174,9 @@ class ModeFollowingShaper:
         check_size(times[-1] / self.h + 2.0, "MAX_SAMPLED_LENGTH", f"a {self.kind} shaper for omega = {omega:g} rad/s "
                    f"sampled at fs = {self.fs:g} Hz would be", "samples long", "use a lower fs or a higher frequency")
         delays, weights = grid_impulses(times, amplitudes, self.h)
-        self.mode = (float(omega), float(zeta))
-        self.designs += 1
-        return tuple(zip(delays, weights))
+        taps = tuple(zip(delays, weights))
+        self._pending = ((omega, zeta), taps)
+        return taps
 
     def _fit(self, reach):
         """Grow the ring of past commands to hold ``reach`` samples (a power of two, copied in order)."""
@@ -202,9 +212,11 @@ class ModeFollowingShaper:
         current = self._segments[-1]
         if self._moved(omega, zeta):
             taps = self._taps(omega, zeta)
+            self.mode = (float(omega), float(zeta))
+            self.designs += 1
             if current.moved:  # the changes made so far keep their design: a new segment begins here
                 current.end, current.end_value = k - 1, self._last
-                current = _Segment(taps, k, self._last)
+                current = CommandSegment(taps, k, self._last)
                 self._segments.append(current)
             else:  # no change commanded under the old design: nothing in flight depends on it
                 current.taps, current.reach = taps, taps[-1][0] + 1
@@ -216,17 +228,32 @@ class ModeFollowingShaper:
         segments = self._segments
         while len(segments) > 1 and k - (segments[0].reach - 1) >= segments[0].end:
             segments.pop(0)  # its last change has reached its last impulse: folded into the base
+        y = self._sum(k, u)
+        self._k = k + 1
+        return y
+
+    def _sum(self, k, u):
+        """The output at sample ``k`` with command ``u`` there and the samples before it in the ring."""
         ring, mask = self._ring, self._mask
-        y = segments[0].base
-        for segment in segments:
+        y = self._segments[0].base
+        for segment in self._segments:
             start, end, base = segment.start, segment.end, segment.base
             for d, w in segment.taps:
                 j = k - d
                 if j < start:
                     continue
-                y += w * ((ring[j & mask] if end is None or j <= end else segment.end_value) - base)
-        self._k = k + 1
+                value = u if j == k else ring[j & mask]
+                y += w * ((value if end is None or j <= end else segment.end_value) - base)
         return y
+
+    def output(self, command, omega, zeta):
+        """What ``step(command, omega, zeta)`` will return, without taking the sample: the output if
+        the command holds, plus the first impulse of the design for the mode times the change
+        (module docstring, Feed-through). Equal to it to rounding (the sums are grouped otherwise)."""
+        u = check_finite(command, "command")
+        taps = self._taps(omega, zeta) if self._moved(omega, zeta) else self.taps
+        first = taps[0][1] if taps[0][0] == 0 else 0.0
+        return self._sum(self._k, self._last) + first * (u - self._last)
 
 
 class ScheduledShaperKernel:
@@ -242,6 +269,11 @@ class ScheduledShaperKernel:
         self.value = schedule.values[0] if value0 is None else check_finite(value0, "value0")
         self._mode = schedule.mode(self.value)
         self.shaper = ModeFollowingShaper(fs, *self._mode, kind=kind, n=n, vtol=vtol, u0=u0, resolution=resolution)
+
+    def output(self, command, value):
+        """What ``step(command, value)`` will return, without taking the sample (feed-through)."""
+        mode = self._mode if value == self.value else self.schedule.mode(value)
+        return self.shaper.output(command, *mode)
 
     def step(self, command, value):
         """Shape one command sample at scheduling ``value``."""

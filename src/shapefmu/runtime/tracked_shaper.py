@@ -52,6 +52,10 @@ from .ekf import P0_OMEGA, P0_SIGMA, ResonanceEKF
 from .scheduled_shaper import ModeFollowingShaper
 
 
+# Commands at rest counted for a command resting since before the first sample: "for ever", as an int,
+# since an FMU state holding inf would be refused as forged (fmi/python/state_codec.first_non_finite).
+RESTED_FOR_EVER = 2**62
+
 # Tracking tuning: the phasor's random walk per sample and the decay rate's per period, as fractions
 # of the ring amplitude and of the frequency's walk (module docstring, Tuning).
 Q_PHASOR = 1e-4
@@ -107,7 +111,7 @@ class TrackedShaperKernel:
         self.mode = (omega0, zeta0)  # the design point in force: the guess, then the last good estimate
         u0 = check_finite(u0, "u0")
         # Commands in a row equal to rest, up to the last sample; u0 at rest counts as rested for ever.
-        self._rested = math.inf if u0 == self.rest else 0
+        self._rested = RESTED_FOR_EVER if u0 == self.rest else 0
         self._output, self._changed = u0, False  # the last shaped command, and whether it moved then
         self._watching = False
 

@@ -21,6 +21,8 @@ KINDS = {
     "ProfileGenerator": "profile_generator",
     "EKFTuner": "ekf_tuner",
     "STOSController": "stos_controller",
+    "ScheduledShaper": "scheduled_shaper",
+    "TrackedShaper": "tracked_shaper",
 }
 
 

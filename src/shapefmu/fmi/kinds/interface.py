@@ -84,6 +84,16 @@ def impulse_shaping(ts_start):
     )
 
 
+def redesigned_shaper_parameters(kinds):
+    """``kind`` (zv), ``n`` and ``vtol`` of a shaper re-designed while it runs, one of the single-mode
+    ``kinds`` (the ScheduledShaper's, the TrackedShaper's; as the Shaper's)."""
+    return (
+        parameter("kind", "zv", f"shaper design, a single-mode kind: {', '.join(k for k in kinds if k != 'simultaneous')}"),
+        parameter("n", 1, "derivative order of zv_dn (0 = ZV, 1 = ZVD, ...)", minimum=0),
+        parameter("vtol", 0.05, "tolerable residual vibration of ei, ei2, ei3, in (0, 0.25]", maximum=0.25),
+    )
+
+
 def sampled_description(summary, inputs, period="Ts"):
     """A sampled FMU's description: ``summary`` and the semantics of its clock."""
     return (

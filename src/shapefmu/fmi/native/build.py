@@ -21,7 +21,7 @@ from shapefmu.fmi.native.codegen import write_sources
 from shapefmu.fmi.native.compile import build_binaries, build_description, copy_c_files, write_layer, zip_fmu
 from shapefmu.fmi.native.model_part import ModelPart, check_name
 from shapefmu.fmi.native.nonlinear import NonlinearPlant
-from shapefmu.plants import as_plant
+from shapefmu.plants import as_plant, load_scheduled
 from shapefmu.runtime.checks import check_size, read_text_file
 
 # The hand-written C shipped with every plant FMU (package data in fmi/native/c/) besides the generic
@@ -40,8 +40,9 @@ def _from_model_file(path: Path, name: str | None) -> ModelPart:
     data = tomllib.loads(read_text_file(path, "plant model"))  # as_plant read and checked it just now
     signals = {signal: fields for key in ("inputs", "outputs") for signal, fields in data[key].items()}
     descriptions = {key: raw.get("description", "") for key, raw in data["parameters"].items()}
+    scheduling = load_scheduled(path).scheduling if "scheduling" in data else None
     part = linear.model_part(plant, name=name, signals=signals, descriptions=descriptions,
-                             description=data.get("description", ""))
+                             description=data.get("description", ""), scheduling=scheduling)
     return dataclasses.replace(part, source=data.get("source", ""))
 
 
@@ -74,7 +75,7 @@ def _about(part: ModelPart) -> str:
             f"A plant model of shapefmu as a native C FMU: {len(part.states)} continuous states, inputs "
             f"{', '.join(s.name for s in part.inputs) or 'none'}, outputs {', '.join(s.name for s in part.outputs)}. "
             f"Model Exchange gives the host the state derivatives; Co-Simulation steps with {step}. "
-            f"The inputs are held over a communication step. sources/ holds its C code (the generated model and "
+            f"The inputs are held over a communication step{_about_scheduling(part)}. sources/ holds its C code (the generated model and "
             f"shapefmu's FMI layer).")
 
 
@@ -119,6 +120,16 @@ def build_plant_fmu(model, out_path, *, name: str | None = None, fmi_version: st
 
 
 LOG_CATEGORIES = (("logStatusError", ""), ("logAll", ""))
+
+
+def _about_scheduling(part: ModelPart) -> str:
+    """What the documentation says of a plant's scheduling inputs (nothing without one)."""
+    if not part.scheduled_inputs:
+        return ""
+    names = ", ".join(f"{s.name} (in [{s.minimum:g}, {s.maximum:g}] {s.unit})" for s in part.inputs[-part.scheduled_inputs:])
+    return (f"; the parameters depend on the scheduling input {names}, which the FMU refuses outside its range: "
+            f"the parameters are the plant's at the input's start value, and the exact step takes the matrices at "
+            f"the input's value during the step")
 
 
 def _description(part: ModelPart, guid: str, source_files: tuple[str, ...], date: str | None) -> ModelDescription:

@@ -58,6 +58,8 @@ def write_sources(part: ModelPart, guid: str, directory: Path) -> list[str]:
         ("state_start", "double", [_c_double(s.start) for s in part.states]),
         ("state_nominal", "double", [_c_double(s.nominal) for s in part.states]),
         ("input_start", "double", [_c_double(s.start) for s in part.inputs]),
+        ("scheduled_min", "double", [_c_double(s.minimum) for s in part.inputs[len(part.inputs) - part.scheduled_inputs:]]),
+        ("scheduled_max", "double", [_c_double(s.maximum) for s in part.inputs[len(part.inputs) - part.scheduled_inputs:]]),
         ("parameters", "PlantParameter", [
             f'{{"{p.name}", {_c_double(p.value)}, {int(p.tunable)}, {_CONSTRAINT_C[p.constraint]}}}'
             for p in part.parameters]),
@@ -80,7 +82,8 @@ const PlantModel plant_model = {{
     {int(part.linear)}, {substep}, {work},
     {references["state_names"]}, {references["input_names"]}, {references["output_names"]},
     {references["state_start"]}, {references["state_nominal"]}, {references["input_start"]},
-    {references["parameters"]}
+    {references["parameters"]},
+    {part.scheduled_inputs}, {references["scheduled_min"]}, {references["scheduled_max"]}
 }};
 
 """ + _adapter(

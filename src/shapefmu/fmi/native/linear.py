@@ -9,6 +9,11 @@ becomes the generic ``state_space`` kind whose parameters are the entries of A, 
 
 Vector parameters become scalar FMU parameters ``name[1]``, ``name[2]``, ... (FMI 2.0 structured
 naming); matrix entries ``A[i,j]`` (1-based).
+
+A model file's scheduling input (``shapefmu.plants.scheduling``) becomes the FMU's last input: each
+parameter that depends on it enters the mapping as the symbol of its FMU parameter (its value at the
+input's start) plus its rate times (input - start), the file's affine law, so A and B are functions
+of the input while the plant stays linear in its state and its command (``ModelPart.scheduled_inputs``).
 """
 
 from __future__ import annotations
@@ -24,6 +29,7 @@ from shapefmu.fmi.native.model_part import ModelPart, ScalarParameter, Signal, p
 from shapefmu.plants import Plant
 from shapefmu.plants.library import STANDARD_GRAVITY, sprung_masses_matrices
 from shapefmu.plants.loader import PARAMETER_SPECS
+from shapefmu.plants.scheduling import SchedulingInput
 
 # Library plants name the mode frequencies omega (rad/s) where model files write f (Hz or rad/s).
 _EXTRA_UNITS = {"omega": {"rad/s": 1.0}}
@@ -33,11 +39,15 @@ class _Parameters:
     """Creates the FMU's scalar parameters of one plant and hands out their symbols, converted to
     the units the plant library's constructors take."""
 
-    def __init__(self, plant: Plant, tunable: bool):
+    def __init__(self, plant: Plant, tunable: bool, scheduling: SchedulingInput | None = None):
         self.plant = plant
         self.tunable = tunable
         self.scalars: list[ScalarParameter] = []
         self.descriptions: dict[str, str] = {}
+        self.scheduling = scheduling
+        # the scheduling input's symbol, and its distance from the start value the parameters hold at
+        self.input = ca.SX.sym(scheduling.name) if scheduling is not None else None
+        self._shift = self.input - scheduling.start if scheduling is not None else None
 
     def has(self, name: str) -> bool:
         return name in self.plant.parameters
@@ -51,11 +61,22 @@ class _Parameters:
             raise _Mismatch(f"parameter {name} has unit {unit!r}, expected one of {sorted(units)}")
         return units[unit]
 
-    def _make(self, name: str, value: float, unit: str, constraint: str, factor: float) -> ca.SX:
+    def _make(self, name: str, value: float, unit: str, constraint: str, factor: float, rate: float = 0.0) -> ca.SX:
         symbol = ca.SX.sym(name)
         description = self.descriptions.get(name.split("[")[0]) or f"parameter {name} of the {self.plant.kind} model"
+        if rate:  # the value at the input's start, moved by the file's affine law
+            s = self.scheduling
+            description += (f" at {s.name} = {s.start:g} {s.unit}; it changes by {rate:g} {unit} per {s.unit} "
+                            f"of the input {s.name}")
         self.scalars.append(ScalarParameter(name, symbol, float(value), unit, self.tunable, constraint, description))
-        return factor * symbol
+        return factor * (symbol + rate * self._shift) if rate else factor * symbol
+
+    def _rates(self, name: str, size: int | None) -> tuple[float, ...]:
+        """The change per unit of the scheduling input of each entry of parameter ``name`` (0 without one)."""
+        rate = self.scheduling.per_unit.get(name, 0.0) if self.scheduling is not None else 0.0
+        if size is None:
+            return (float(rate),)
+        return tuple(rate) if isinstance(rate, tuple) else (float(rate),) * size
 
     def scalar(self, name: str, constraint: str = "any", default: float | None = None) -> ca.SX:
         if not self.has(name):
@@ -65,7 +86,8 @@ class _Parameters:
         parameter = self.plant.parameters[name]
         if isinstance(parameter.value, tuple):
             raise _Mismatch(f"parameter {name} must be a scalar")
-        return self._make(name, parameter.value, parameter.unit, constraint, self._factor(name, parameter.unit))
+        return self._make(name, parameter.value, parameter.unit, constraint, self._factor(name, parameter.unit),
+                          self._rates(name, None)[0])
 
     def vector(self, name: str, constraint: str = "any", default: float | None = None, size: int = 0,
                first: str | None = None) -> list[ca.SX]:
@@ -77,8 +99,8 @@ class _Parameters:
         parameter = self.plant.parameters[name]
         values = parameter.value if isinstance(parameter.value, tuple) else (parameter.value,)
         factor = self._factor(name, parameter.unit)
-        return [self._make(f"{name}[{i}]", v, parameter.unit, first if i == 1 and first else constraint, factor)
-                for i, v in enumerate(values, 1)]
+        return [self._make(f"{name}[{i}]", v, parameter.unit, first if i == 1 and first else constraint, factor, rate)
+                for i, (v, rate) in enumerate(zip(values, self._rates(name, len(values))), 1)]
 
 
 class _Mismatch(Exception):
@@ -285,14 +307,16 @@ def state_nominals(A: np.ndarray, B: np.ndarray) -> np.ndarray:
 
 
 def model_part(plant: Plant, *, name: str | None = None, signals: dict | None = None,
-               descriptions: dict | None = None, description: str = "") -> ModelPart:
+               descriptions: dict | None = None, description: str = "",
+               scheduling: SchedulingInput | None = None) -> ModelPart:
     """The model part of a linear plant: its kind's parameter mapping (or state_space), checked
     against the plant's own matrices at the plant's parameter values.
 
     ``signals`` maps input and output names to their model-file fields (``unit``, ``description``),
     ``descriptions`` parameter names to descriptions (both as read from a model file). An input
     with a limit |u| <= U gets min -U and max U; the states are described by what they are in the
-    plant's kind (``_state_signals``).
+    plant's kind (``_state_signals``). ``scheduling`` (a model file's, ``plant`` being the model at
+    its start value) becomes the last input, with its range as min and max.
     """
     signals = signals or {}
     matrices = None
@@ -300,11 +324,11 @@ def model_part(plant: Plant, *, name: str | None = None, signals: dict | None = 
     mapping = _MAPPINGS.get(plant.kind)
     if mapping is not None:
         build, tunable, keep_states = mapping
-        parameters = _Parameters(plant, tunable)
+        parameters = _Parameters(plant, tunable, scheduling)
         parameters.descriptions = dict(descriptions or {})
         try:
             candidate = build(parameters)
-            numeric = _numeric(parameters.scalars, candidate)
+            numeric = _numeric(parameters.scalars, _at_start(candidate, parameters))
             same = _same_matrices(numeric, (plant.A, plant.B, plant.C, plant.D)) if keep_states else \
                 _same_transfer_function(numeric, plant)
             if same:
@@ -312,26 +336,45 @@ def model_part(plant: Plant, *, name: str | None = None, signals: dict | None = 
         except _Mismatch:
             pass
     if matrices is None:
+        if scheduling is not None:
+            raise ValueError(f"plant {plant.name!r}: a scheduling input needs a kind whose parameters the FMU "
+                             f"maps to its matrices ({', '.join(k for k, m in _MAPPINGS.items() if m[2])}), got "
+                             f"{plant.kind!r}")
         keep_states = True
         scalars, matrices = _state_space(plant)
     A, B, C, D = matrices
-    numeric_A, numeric_B = _numeric(scalars, [A, B])
+    numeric_A, numeric_B = _numeric(scalars, _at_start([A, B], parameters if scheduling is not None else None))
     nominals = state_nominals(numeric_A, numeric_B)
     x = ca.SX.sym("x", A.shape[0])
-    u = ca.SX.sym("u", B.shape[1])
+    command = ca.SX.sym("u", B.shape[1])
     outputs = tuple(_signal(s, signals, f"output {s} of the plant") for s in plant.outputs)
     limits = {s: plant.limits.get(s) for s in plant.inputs}
+    inputs = tuple(replace(_signal(s, signals, f"input {s} of the plant"), minimum=-limits[s], maximum=limits[s])
+                   if limits[s] is not None else _signal(s, signals, f"input {s} of the plant") for s in plant.inputs)
+    u = command
+    if scheduling is not None:
+        inputs += (Signal(scheduling.name, scheduling.unit, scheduling.start, description=scheduling.description
+                          or f"scheduling input {scheduling.name} of the plant", minimum=scheduling.minimum,
+                          maximum=scheduling.maximum),)
+        u = ca.vertcat(command, parameters.input)
     return ModelPart(
         name=name or plant.name,
         description=description,
         states=_state_signals(plant.kind if keep_states else "realisation", plant.states, nominals, outputs),
-        inputs=tuple(replace(_signal(s, signals, f"input {s} of the plant"), minimum=-limits[s], maximum=limits[s])
-                     if limits[s] is not None else _signal(s, signals, f"input {s} of the plant") for s in plant.inputs),
+        inputs=inputs,
         outputs=outputs,
         parameters=tuple(scalars),
-        x=x, u=u, f=A @ x + B @ u, g=C @ x + D @ u,
+        x=x, u=u, f=A @ x + B @ command, g=C @ x + D @ command,
         linear=True,
+        scheduled_inputs=0 if scheduling is None else 1,
     )
+
+
+def _at_start(matrices, parameters: _Parameters | None) -> list:
+    """The matrices with the scheduling input (if any) at its start value, where the file's parameters hold."""
+    if parameters is None or parameters.input is None:
+        return list(matrices)
+    return [ca.substitute(M, parameters.input, ca.SX(parameters.scheduling.start)) for M in matrices]
 
 
 def _signal(name: str, signals: dict, fallback: str) -> Signal:

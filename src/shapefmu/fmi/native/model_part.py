@@ -80,6 +80,10 @@ class ModelPart:
     ``x``, ``u`` and the parameters' symbols. ``linear`` selects the exact zero-order-hold
     Co-Simulation step; otherwise the step is a fixed-substep RK4 whose substep is the parameter
     named by ``substep_parameter``.
+
+    The last ``scheduled_inputs`` inputs are scheduling inputs (an added mass, a rope length) on which
+    the matrices of a linear plant depend: it is linear in its state and its other inputs at each
+    value of them, f = A(s) x + B(s) u, and its exact step holds s over the step as it holds u.
     """
 
     name: str
@@ -95,6 +99,7 @@ class ModelPart:
     linear: bool
     substep_parameter: str | None = None
     source: str = ""   # where the model comes from (a model file's ``source``: "paper 002, eq. (1), Table I")
+    scheduled_inputs: int = 0
 
     def __post_init__(self):
         # The name and every description and unit reach modelDescription.xml (escaped there, but
@@ -120,6 +125,10 @@ class ModelPart:
         for key, (shape, expected) in shapes.items():
             if tuple(shape) != expected:
                 raise ValueError(f"plant {self.name!r}: {key} must have shape {expected}, got {tuple(shape)}")
+        if not (0 <= self.scheduled_inputs < len(self.inputs)) or (self.scheduled_inputs and not self.linear):
+            raise ValueError(f"plant {self.name!r}: scheduled_inputs must be in [0, {len(self.inputs) - 1}] (the "
+                             f"last inputs, after a command) and only a linear plant has them, got "
+                             f"{self.scheduled_inputs!r}")
         if not self.linear and self.substep_parameter not in [p.name for p in self.parameters]:
             raise ValueError(f"plant {self.name!r}: a nonlinear plant needs its RK4 substep among the parameters, "
                              f"got substep_parameter={self.substep_parameter!r}")
@@ -146,12 +155,16 @@ class ModelPart:
                       for s in self.outputs]
         variables += [Variable(q.name, "Real", "parameter", "tunable" if q.tunable else "fixed", q.value, q.unit,
                                q.description, _LOWER_BOUNDS.get(q.constraint), initial="exact") for q in self.parameters]
-        command = self.inputs[0].name if len(self.inputs) == 1 else None
+        command = self.inputs[0].name if len(self.inputs) - self.scheduled_inputs == 1 else None
         return Interface(self.name, self.description, tuple(variables), command_in=command)
 
     def linearisation(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """(A, B, C, D) of the plant at rest (x = 0, u = 0, the parameters' values)."""
-        point = (np.zeros(self.x.shape[0]), np.zeros(self.u.shape[0]), [q.value for q in self.parameters])
+        """(A, B, C, D) of the plant at rest (x = 0, commands 0, the scheduling inputs and the parameters
+        at their start values)."""
+        inputs = np.zeros(self.u.shape[0])
+        if self.scheduled_inputs:
+            inputs[-self.scheduled_inputs:] = [s.start for s in self.inputs[-self.scheduled_inputs:]]
+        point = (np.zeros(self.x.shape[0]), inputs, [q.value for q in self.parameters])
         _, jacobians = self.functions()
         return tuple(np.array(M, dtype=float) for M in jacobians(*point))
 

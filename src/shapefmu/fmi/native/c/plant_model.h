@@ -9,7 +9,11 @@
  *   A = df/dx, B = df/du, C = dg/dx, D = dg/du   (plant_jacobians)
  *
  * For a linear plant f = A(p) x + B(p) u and g = C(p) x + D(p) u, and the Jacobians are the
- * state-space matrices computed from the physical parameters p.
+ * state-space matrices computed from the physical parameters p. The last n_scheduled inputs s of a
+ * linear plant are scheduling inputs (an added mass, a rope length) on which the matrices depend:
+ * f = A(p, s) x + B(p, s) u, linear in x and the other inputs u at each s; the columns of B for s are
+ * then df/ds, which the exact step does not use. A scheduling input outside [scheduled_min,
+ * scheduled_max] is refused when it is set.
  *
  * Value references (one Real array, indexed by value reference):
  *   0                          time
@@ -53,6 +57,8 @@ typedef struct {
     const double *state_nominal;
     const double *input_start;
     const PlantParameter *parameters;
+    int n_scheduled;            /* the last inputs the matrices depend on (0 or more) */
+    const double *scheduled_min, *scheduled_max;
 } PlantModel;
 
 extern const PlantModel plant_model;

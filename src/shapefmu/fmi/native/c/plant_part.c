@@ -5,7 +5,8 @@
  * says: 0 time, states, derivatives, inputs, outputs, parameters), checks the parameter
  * constraints, computes derivatives and outputs from the generated model part on demand, and
  * steps a Co-Simulation instance: exact zero-order hold for linear plants (the matrix exponential
- * computed in C when the step size or a parameter changes), fixed-substep RK4 otherwise.
+ * computed in C when the step size, a parameter or a scheduling input changes), fixed-substep RK4
+ * otherwise.
  */
 #include <math.h>
 #include <string.h>
@@ -16,12 +17,14 @@
 
 typedef struct {
     int derived_valid;         /* derivatives and outputs are those of the current x, u, p */
-    int jacobians_valid;       /* A, B, C, D are those of the current p (linear) or x, u, p */
+    int jacobians_valid;       /* A, B, C, D are those of the current p (linear, unscheduled) or x, u, p */
     double *A, *B, *C, *D;
     double *work;              /* scratch of the generated CasADi functions */
-    /* exact zero-order hold of linear plants: Phi, Gamma for step zoh_step, cached */
+    /* exact zero-order hold of linear plants: Phi, Gamma for step zoh_step (and the scheduling
+     * inputs at zoh_schedule), cached */
     int zoh_valid;
     double zoh_step;
+    double *zoh_schedule;
     double *augmented, *exponential, *Phi, *Gamma, *expm_work;
     int *expm_iwork;
     /* RK4 stages of nonlinear plants */
@@ -34,6 +37,8 @@ typedef enum { TIME, STATE, DERIVATIVE, INPUT, OUTPUT, PARAMETER, NO_VARIABLE } 
 
 static int nx(void) { return plant_model.n_states; }
 static int nu(void) { return plant_model.n_inputs; }
+/* the inputs the exact step holds as commands: all but the trailing scheduling inputs */
+static int n_commands(void) { return plant_model.n_inputs - plant_model.n_scheduled; }
 static int ny(void) { return plant_model.n_outputs; }
 static int np(void) { return plant_model.n_parameters; }
 static size_t off_state(void) { return 1; }
@@ -121,18 +126,23 @@ static ModelStatus update_jacobians(ModelInstance *inst, const char *function) {
         || !all_finite(plant->A, n * n) || !all_finite(plant->B, n * m) || !all_finite(plant->C, p * n)
         || !all_finite(plant->D, p * m))
         return model_fail(inst, "%s: the parameters give a non-finite Jacobian (state-space matrices)", function);
-    /* A linear plant's Jacobians depend on p only: valid until a parameter changes. */
-    plant->jacobians_valid = plant_model.linear;
+    /* An unscheduled linear plant's Jacobians depend on p only: valid until a parameter changes. A
+     * scheduled one's columns df/ds depend on x and u: recomputed on demand, as a nonlinear plant's. */
+    plant->jacobians_valid = plant_model.linear && plant_model.n_scheduled == 0;
     return MODEL_OK;
 }
 
 /* Phi = e^{A h}, Gamma = int_0^h e^{A s} ds B from expm([[A, B], [0, 0]] h) = [[Phi, Gamma], [0, I]]
- * (Van Loan, IEEE TAC 23(3), 1978): the exact zero-order-hold discretisation. */
+ * (Van Loan, IEEE TAC 23(3), 1978): the exact zero-order-hold discretisation, B being the columns of
+ * the commands (the first n_commands inputs) at the scheduling inputs' values held over the step. */
 static ModelStatus update_zoh(ModelInstance *inst, double h, const char *function) {
     Plant *plant = plant_of(inst);
-    if (plant->zoh_valid && plant->zoh_step == h) return MODEL_OK;
+    const double *schedule = u_of(inst) + n_commands();
+    const size_t schedule_bytes = (size_t)plant_model.n_scheduled * sizeof(double);
+    if (plant->zoh_valid && plant->zoh_step == h && memcmp(plant->zoh_schedule, schedule, schedule_bytes) == 0)
+        return MODEL_OK;
     if (update_jacobians(inst, function) != MODEL_OK) return MODEL_ERROR;
-    const int n = nx(), m = nu(), k = n + m;
+    const int n = nx(), m = n_commands(), k = n + m;
     double *M = plant->augmented;
     memset(M, 0, (size_t)k * (size_t)k * sizeof(double));
     for (int j = 0; j < n; j++)
@@ -146,6 +156,7 @@ static ModelStatus update_zoh(ModelInstance *inst, double h, const char *functio
     for (int j = 0; j < m; j++)
         for (int i = 0; i < n; i++) plant->Gamma[(size_t)j * n + i] = plant->exponential[(size_t)(n + j) * k + i];
     plant->zoh_step = h;
+    memcpy(plant->zoh_schedule, schedule, schedule_bytes);
     plant->zoh_valid = 1;
     model_debug(inst, "%s: zero-order-hold matrices computed for step %g", function, h);
     return MODEL_OK;
@@ -154,7 +165,7 @@ static ModelStatus update_zoh(ModelInstance *inst, double h, const char *functio
 static ModelStatus step_zoh(ModelInstance *inst, double h, const char *function) {
     if (update_zoh(inst, h, function) != MODEL_OK) return MODEL_ERROR;
     Plant *plant = plant_of(inst);
-    const int n = nx(), m = nu();
+    const int n = nx(), m = n_commands();
     double *x = x_of(inst), *next = plant->x_next;
     const double *u = u_of(inst);
     for (int i = 0; i < n; i++) {
@@ -244,7 +255,14 @@ static ModelStatus partial_derivative(ModelInstance *inst, size_t unknown, size_
 
 static ModelStatus check_real(ModelInstance *inst, size_t vr, double value, const char *function) {
     int i = 0;
-    if (role_of(vr, &i) != PARAMETER) {
+    const Role role = role_of(vr, &i);
+    if (role == INPUT && i >= n_commands()) {
+        const double low = plant_model.scheduled_min[i - n_commands()], high = plant_model.scheduled_max[i - n_commands()];
+        if (isfinite(value) && value >= low && value <= high) return MODEL_OK;
+        return model_fail(inst, "%s: scheduling input %s must be in [%g, %g], got %g", function,
+                          plant_model.input_names[i], low, high, value);
+    }
+    if (role != PARAMETER) {
         if (isfinite(value)) return MODEL_OK;
         const char *name = "?";
         variable(inst, TYPE_REAL, vr, &name);
@@ -308,7 +326,7 @@ static void free_model(ModelInstance *inst) {
     Plant *plant = plant_of(inst);
     if (plant == NULL) return;
     void *buffers[] = {plant->A, plant->B, plant->C, plant->D, plant->work, plant->augmented, plant->exponential,
-                       plant->Phi, plant->Gamma, plant->expm_work, plant->expm_iwork, plant->k1, plant->k2,
+                       plant->Phi, plant->Gamma, plant->zoh_schedule, plant->expm_work, plant->expm_iwork, plant->k1, plant->k2,
                        plant->k3, plant->k4, plant->x_stage, plant->x_next};
     for (size_t i = 0; i < sizeof buffers / sizeof buffers[0]; i++) model_release(inst, buffers[i]);
     model_release(inst, plant);
@@ -320,7 +338,7 @@ static int instantiate(ModelInstance *inst) {
     if (plant == NULL) return -1;
     memset(plant, 0, sizeof *plant);
     inst->model = plant;
-    const size_t n = (size_t)nx(), m = (size_t)nu(), p = (size_t)ny(), k = n + m;
+    const size_t n = (size_t)nx(), m = (size_t)nu(), p = (size_t)ny(), k = n + (size_t)n_commands();
     plant->A = model_allocate(inst, n * n, sizeof(double));
     plant->B = model_allocate(inst, n * m, sizeof(double));
     plant->C = model_allocate(inst, p * n, sizeof(double));
@@ -332,11 +350,12 @@ static int instantiate(ModelInstance *inst) {
         plant->augmented = model_allocate(inst, k * k, sizeof(double));
         plant->exponential = model_allocate(inst, k * k, sizeof(double));
         plant->Phi = model_allocate(inst, n * n, sizeof(double));
-        plant->Gamma = model_allocate(inst, n * m, sizeof(double));
+        plant->Gamma = model_allocate(inst, n * (size_t)n_commands(), sizeof(double));
+        plant->zoh_schedule = model_allocate(inst, (size_t)plant_model.n_scheduled + 1, sizeof(double));
         plant->expm_work = model_allocate(inst, PLANT_EXPM_WORK(k), sizeof(double));
         plant->expm_iwork = model_allocate(inst, PLANT_EXPM_IWORK(k), sizeof(int));
         complete = complete && plant->augmented && plant->exponential && plant->Phi && plant->Gamma
-                   && plant->expm_work && plant->expm_iwork;
+                   && plant->zoh_schedule && plant->expm_work && plant->expm_iwork;
     } else {
         plant->k1 = model_allocate(inst, n, sizeof(double));
         plant->k2 = model_allocate(inst, n, sizeof(double));

@@ -1,0 +1,124 @@
+"""The ScheduledShaper FMU (fmi/kinds/scheduled_shaper.py, issue 37): at every sample its output equals
+the change-by-change sum of the closed-form shapers designed for the scheduling value in force when
+each change was commanded (tests/test_scheduled_shaper.py's reference: Singer & Seering's ZV and ZVD,
+split onto the grid by hand), in fmpy and in our master; no jump when the design changes.
+"""
+
+import json
+
+import numpy as np
+import pytest
+from support.fixtures_fmi import SCHEDULED_STARTS
+from support.fmpy_slaves import initialised
+from test_scheduled_shaper import BED, FS, change_by_change, closed_form_taps, schedule_mode
+
+from shapefmu.fmi.kinds.scheduled_shaper import schedule_start_values
+
+TS = 1.0 / FS
+
+
+def test_the_fixtures_schedule_is_the_reference_bed():
+    """scheduled_zv_fmu and scheduled_zvd_fmu (support/fixtures_fmi.py) hold BED's rows at FS."""
+    assert SCHEDULED_STARTS["Ts"] == TS
+    assert schedule_start_values(*BED).items() - {"extrapolate": False}.items() <= SCHEDULED_STARTS.items()
+
+
+def moves_through_a_drift(n=600, seed=11):
+    """Moves, holds and jumps of the command while the bed gains mass sample by sample, holds it, and
+    loses some in one step: every kind of change of both inputs."""
+    rng = np.random.default_rng(seed)
+    u = np.cumsum(rng.normal(size=n)) * (rng.random(n) < 0.7)
+    values = np.clip(np.linspace(0.0, 300.0, n) + rng.normal(0.0, 5.0, n), 0.0, 300.0)
+    values[250:350] = 180.0
+    values[350:] -= 60.0
+    return u, np.clip(values, 0.0, 300.0)
+
+
+def run_fmpy(fmu, u, values):
+    """y at each sample instant k Ts: both inputs set there, y read (feed-through), then the step."""
+    slave, vr = initialised(fmu, {"scheduling": float(values[0])})
+    y = []
+    for k, (a, s) in enumerate(zip(u, values)):
+        slave.setReal([vr["u"], vr["scheduling"]], [float(a), float(s)])
+        y.append(slave.getReal([vr["y"]])[0])
+        slave.doStep(k * TS, TS)
+    slave.terminate()
+    slave.freeInstance()
+    return np.array(y)
+
+
+@pytest.mark.parametrize("kind", ["zv", "zvd"])
+def test_output_is_at_every_sample_the_shaper_designed_for_the_value_in_force(request, kind):
+    fmu = request.getfixturevalue(f"scheduled_{kind}_fmu")
+    u, values = moves_through_a_drift()
+    y = run_fmpy(fmu, u, values)
+    np.testing.assert_allclose(y, change_by_change(u, 0.0, values, kind), rtol=0, atol=1e-12)
+
+
+def test_a_command_at_rest_does_not_move_when_the_design_changes(scheduled_zv_fmu):
+    values = np.tile([0.0, 300.0, 40.0, 220.0], 50)
+    y = run_fmpy(scheduled_zv_fmu, np.full(values.size, 0.0), values)
+    assert np.all(y == 0.0)
+    u = np.concatenate([np.linspace(0.0, 1.0, 40), np.ones(160)])  # a move, then rest through the changes
+    y = run_fmpy(scheduled_zv_fmu, u, values)
+    assert np.all(y[120:] == y[-1]) and y[-1] == pytest.approx(1.0, abs=1e-15)
+
+
+def player(tmp_path, name, samples, ts=TS):
+    """A ReferencePlayer FMU holding samples[k] around k ts (each switch half a sample before)."""
+    from shapefmu.fmi import build_fmu
+
+    changes = np.flatnonzero(np.diff(samples)) + 1
+    table = {"kind": "signal_table", "interpolation": "hold", "before": float(samples[0]),
+             "time": [(k - 0.5) * ts for k in changes], "value": [float(samples[k]) for k in changes]}
+    return build_fmu("ReferencePlayer", tmp_path / f"{name}.fmu", table=json.dumps(table))
+
+
+def test_in_our_master_fed_by_two_players_the_output_is_the_same_sum(scheduled_zv_fmu, tmp_path):
+    """Jacobi steps: the shaper takes the players' values at t_k for its sample k, and the master
+    records its output after the step, before the values of t_(k+1) are set: sample k+1's output
+    with the command held, the change-by-change sum less the first impulse of the change at k+1."""
+    from shapefmu.cosim.master import simulate
+    from shapefmu.fmi.ssp import System
+
+    u, values = moves_through_a_drift(n=300, seed=5)
+    # Both inputs start where the FMU starts: the master passes the players' outputs on from the first
+    # step, and until then the shaper holds its start values (a pythonfmu output is computed at the
+    # exit of initialisation, after the master has read it).
+    u[0] = values[0] = 0.0
+    system = (System("scheduled")
+              .add("command", player(tmp_path, "command", u))
+              .add("load", player(tmp_path, "load", values))
+              .add("shaper", scheduled_zv_fmu)
+              .connect("command.y", "shaper.u")
+              .connect("load.y", "shaper.scheduling"))
+    result = simulate(system, (u.size - 1) * TS, TS, record=["shaper.y"], algorithm="jacobi")
+    y = np.asarray(result["shaper.y"], dtype=float)
+    first = np.array([closed_form_taps("zv", *schedule_mode(value))[0] for value in values])
+    held = change_by_change(u, 0.0, values, "zv") - first * np.diff(u, prepend=0.0)
+    assert y.size == u.size
+    np.testing.assert_allclose(y, held, rtol=0, atol=1e-12)
+
+
+def test_a_scheduling_value_where_the_law_fails_is_an_error_naming_it(tmp_path):
+    from fmpy.fmi1 import FMICallException
+
+    from shapefmu.fmi import build_fmu
+
+    law = schedule_start_values([0.0, 1.0], [30.0, 20.0], [0.05, 0.05], extrapolate=True)  # 0 Hz at value 3
+    fmu = build_fmu("ScheduledShaper", tmp_path / "law.fmu", **law)
+    slave, vr = initialised(fmu)
+    with pytest.raises(FMICallException):
+        slave.setReal([vr["scheduling"]], [3.5])
+    slave.freeInstance()
+
+
+def test_a_bad_table_fails_the_build_naming_the_row(tmp_path):
+    from shapefmu.fmi import build_fmu
+
+    with pytest.raises(ValueError, match=r"values must be strictly increasing"):
+        build_fmu("ScheduledShaper", tmp_path / "bad.fmu", **schedule_start_values([0.0, 0.0], [30.0, 26.0],
+                                                                                   [0.05, 0.05]))
+    with pytest.raises(ValueError, match=r"zetas\[1\]"):
+        build_fmu("ScheduledShaper", tmp_path / "bad.fmu", **schedule_start_values([0.0, 1.0], [30.0, 26.0],
+                                                                                   [0.05, 1.2]))
