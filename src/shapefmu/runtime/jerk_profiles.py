@@ -1,0 +1,580 @@
+"""Time-optimal jerk-limited profiles of one axis, from any state to any state (standard library only).
+
+An axis is a triple integrator: jerk j(t) in [-J, J] drives acceleration, velocity and position,
+with a in [a_min, a_max] and v in [v_min, v_max]. A profile is seven phases of constant jerk
+(Berscheid & Kroeger, "Jerk-limited Real-time Trajectory Generation with Arbitrary Target States",
+RSS 2021, Sec. IV): jerks (J, 0, -J, 0, -J, 0, J) for the direction "up" (J > 0) and the same with
+-J for "down". Phase 2 holds the acceleration limit, phase 4 the velocity limit, phase 6 the other
+acceleration limit; a phase that is not at a limit has zero length, and without phase 4 the third
+and fifth phases join (the acceleration passes through zero without stopping).
+
+``extremal_profiles`` lists every such profile that reaches the target within the limits: the
+time-optimal one is the shortest, and the others bound the durations the axis cannot take (the
+blocked intervals of the paper, Sec. IV-B: a moving axis that must turn round cannot end in some
+window of durations). Each family is one equation in one unknown, derived here (with sympy, from
+the phase integrals; the coefficients below are that derivation written out):
+
+- velocity limit reached (phase 4 > 0): closed form, the cruise fills the distance;
+- neither limit: u = duration of the joined phases 3 + 5; with a1 - a5 = J u and a1^2 - a5^2 = K,
+  K = J (vf - v0) + (a0^2 - af^2) / 2, the position equation is u^2 times a quartic in u;
+- acceleration limit a_max held (phase 2): a5 = a_max - J u, a quartic in u;
+- a_min held (phase 6): a1 = a_min + J u, a quartic in u;
+- both held: a quadratic in the length of phase 2.
+
+``profile_of_duration`` is the second step: a profile of the axis that lasts exactly T (to end
+together with a slower axis). It cruises at a velocity vc between two time-optimal velocity changes
+(``velocity_change``), vc found so that the position comes out right.
+"""
+
+import math
+
+# A duration, acceleration or velocity this small relative to the problem's own scale is rounding.
+_EPS = 1e-12
+
+
+class Phases:
+    """Constant-jerk phases ``(duration, jerk)`` from the state (p0, v0, a0); the states at the
+    phase boundaries are accumulated once, so that ``state(t)`` is exact polynomials of the phase."""
+
+    __slots__ = ("durations", "jerks", "p", "v", "a", "ends")
+
+    def __init__(self, p0, v0, a0, durations, jerks):
+        self.durations = list(durations)
+        self.jerks = list(jerks)
+        p, v, a = [p0], [v0], [a0]
+        ends = [0.0]
+        for t, j in zip(self.durations, self.jerks):
+            p.append(p[-1] + t * (v[-1] + t * (a[-1] / 2.0 + t * j / 6.0)))
+            v.append(v[-1] + t * (a[-1] + t * j / 2.0))
+            a.append(a[-1] + t * j)
+            ends.append(ends[-1] + t)
+        self.p, self.v, self.a, self.ends = p, v, a, ends
+
+    @property
+    def duration(self):
+        return self.ends[-1]
+
+    def end(self):
+        return self.p[-1], self.v[-1], self.a[-1]
+
+    def state(self, t):
+        """(p, v, a, j) at time t from the start; before 0 the start state, after the end the end
+        state moving on with constant acceleration (jerk 0)."""
+        ends = self.ends
+        if t <= 0.0:
+            return self.p[0], self.v[0], self.a[0], 0.0
+        if t >= ends[-1]:
+            s = t - ends[-1]
+            a, v, p = self.a[-1], self.v[-1], self.p[-1]
+            return p + s * (v + s * a / 2.0), v + s * a, a, 0.0
+        k = _phase_index(ends, t)
+        s, j = t - ends[k], self.jerks[k]
+        a, v, p = self.a[k], self.v[k], self.p[k]
+        return p + s * (v + s * (a / 2.0 + s * j / 6.0)), v + s * (a + s * j / 2.0), a + s * j, j
+
+    def extrema(self):
+        """(v_low, v_high, a_low, a_high) over the whole profile, exactly: the acceleration is
+        extreme at phase ends, the velocity there or where the acceleration crosses zero."""
+        a_low, a_high = min(self.a), max(self.a)
+        v_low, v_high = min(self.v), max(self.v)
+        for k, (t, j) in enumerate(zip(self.durations, self.jerks)):
+            a_start, a_end = self.a[k], self.a[k + 1]
+            if j != 0.0 and a_start * a_end < 0.0:
+                v_turn = self.v[k] - a_start * a_start / (2.0 * j)
+                v_low, v_high = min(v_low, v_turn), max(v_high, v_turn)
+        return v_low, v_high, a_low, a_high
+
+
+def _phase_index(ends, t):
+    low, high = 0, len(ends) - 2
+    while low < high:
+        middle = (low + high + 1) // 2
+        if ends[middle] <= t:
+            low = middle
+        else:
+            high = middle - 1
+    return low
+
+
+class Limits:
+    """Velocity, acceleration and jerk limits of one axis; v_min and a_min are negative."""
+
+    __slots__ = ("v_max", "v_min", "a_max", "a_min", "j_max")
+
+    def __init__(self, v_max, a_max, j_max, v_min=None, a_min=None):
+        self.v_max, self.a_max, self.j_max = v_max, a_max, j_max
+        self.v_min = -v_max if v_min is None else v_min
+        self.a_min = -a_max if a_min is None else a_min
+
+    def oriented(self, up):
+        """(vU, aU, aL, J) of the direction "up" (J > 0) or "down" (everything mirrored)."""
+        if up:
+            return self.v_max, self.a_max, self.a_min, self.j_max
+        return self.v_min, self.a_min, self.a_max, -self.j_max
+
+
+# ---------------------------------------------------------------------------------------------
+# Polynomial roots (real, in an interval)
+
+
+def _evaluate(coefficients, x):
+    value = 0.0
+    for c in coefficients:
+        value = value * x + c
+    return value
+
+
+def _derivative(coefficients):
+    n = len(coefficients) - 1
+    return [c * (n - k) for k, c in enumerate(coefficients[:-1])]
+
+
+def real_roots(coefficients, low, high):
+    """The real roots in [low, high] of the polynomial with ``coefficients`` (highest power first).
+
+    The roots of the derivative split [low, high] into pieces on which the polynomial is monotone;
+    a piece whose ends differ in sign holds one root, found by bisection to the last bit. A
+    derivative root where the polynomial is within rounding of zero is a double root (a tangency,
+    where two extremal profiles meet) and is returned too.
+    """
+    scale = max((abs(c) for c in coefficients), default=0.0)
+    while coefficients and abs(coefficients[0]) <= 1e-14 * scale:
+        coefficients = coefficients[1:]
+    if len(coefficients) < 2 or scale == 0.0:
+        return []
+    if len(coefficients) == 2:
+        x = -coefficients[1] / coefficients[0]
+        return [x] if low <= x <= high else []
+    turns = real_roots(_derivative(coefficients), low, high)
+    points = [low, *turns, high]
+    values = [_evaluate(coefficients, x) for x in points]
+    size = max(abs(c) * max(abs(low), abs(high), 1.0) ** (len(coefficients) - 1 - k)
+               for k, c in enumerate(coefficients))
+    roots = []
+    for x0, x1, f0, f1 in zip(points, points[1:], values, values[1:]):
+        if f0 == 0.0:
+            roots.append(x0)
+        elif f0 * f1 < 0.0:
+            roots.append(_bisect(coefficients, x0, x1, f0))
+    if values[-1] == 0.0:
+        roots.append(points[-1])
+    for x, f in zip(turns, values[1:-1]):
+        if f != 0.0 and abs(f) <= 1e-13 * size:
+            roots.append(x)
+    return sorted(roots)
+
+
+def _bisect(coefficients, x0, x1, f0):
+    for _ in range(200):
+        middle = 0.5 * (x0 + x1)
+        if middle in (x0, x1):
+            break
+        f = _evaluate(coefficients, middle)
+        if f == 0.0:
+            return middle
+        if (f < 0.0) == (f0 < 0.0):
+            x0, f0 = middle, f
+        else:
+            x1 = middle
+    return 0.5 * (x0 + x1)
+
+
+# ---------------------------------------------------------------------------------------------
+# Step 1: the extremal profiles (time-optimal and the ends of the blocked intervals)
+
+
+class Problem:
+    """One axis from (p0, v0, a0) to (pf, vf, af) within ``limits``, with the tolerances its
+    scale allows."""
+
+    __slots__ = ("p0", "v0", "a0", "pf", "vf", "af", "limits", "pd", "tol_p", "tol_v", "tol_a", "tol_t")
+
+    def __init__(self, p0, v0, a0, pf, vf, af, limits):
+        self.p0, self.v0, self.a0, self.pf, self.vf, self.af = p0, v0, a0, pf, vf, af
+        self.limits = limits
+        self.pd = pf - p0
+        lim = limits
+        v_scale = max(lim.v_max, -lim.v_min, abs(v0), abs(vf))
+        a_scale = max(lim.a_max, -lim.a_min, abs(a0), abs(af))
+        # A time scale of the problem: its moves last at least about this long.
+        t_scale = max(a_scale / lim.j_max, v_scale / a_scale, math.sqrt(abs(self.pd) / a_scale))
+        self.tol_t = 1e-12 * t_scale
+        self.tol_a = 1e-10 * a_scale
+        self.tol_v = 1e-9 * v_scale
+        self.tol_p = 1e-9 * max(abs(self.pd), v_scale * t_scale, abs(p0), abs(pf))
+
+    def accept(self, durations, jerks):
+        """The ``Phases`` if these durations make a profile that reaches the target within the
+        limits, else None. Durations negative by rounding only are taken as zero."""
+        tol_t = self.tol_t
+        if any(t < -tol_t or t != t for t in durations):
+            return None
+        durations = [t if t > 0.0 else 0.0 for t in durations]
+        phases = Phases(self.p0, self.v0, self.a0, durations, jerks)
+        p, v, a = phases.end()
+        if abs(p - self.pf) > self.tol_p or abs(v - self.vf) > self.tol_v or abs(a - self.af) > self.tol_a:
+            return None
+        v_low, v_high, a_low, a_high = phases.extrema()
+        lim = self.limits
+        if (a_high > lim.a_max + self.tol_a or a_low < lim.a_min - self.tol_a
+                or v_high > lim.v_max + self.tol_v or v_low < lim.v_min - self.tol_v):
+            return None
+        return phases
+
+
+def velocity_change(v0, a0, v1, a1, a_max, a_min, j_max):
+    """The time-optimal phases [(duration, jerk), ...] from (v0, a0) to (v1, a1), position free.
+
+    Up (J = j_max) or down (J = -j_max) to a peak ap and back: the velocity gained is
+    (ap^2 - a0^2) / 2J + ap t_hold + (ap^2 - a1^2) / 2J; without a hold ap^2 = J (v1 - v0) +
+    (a0^2 + a1^2) / 2, and an ap past the acceleration limit is held at the limit instead.
+    The direction is up when the velocity wanted exceeds what the direct ramp a0 -> a1 gives.
+    """
+    if a1 == a0:
+        direct = 0.0
+    else:
+        direct = (a1 * a1 - a0 * a0) / (2.0 * math.copysign(j_max, a1 - a0))
+    up = v1 - v0 > direct
+    J = j_max if up else -j_max
+    limit = a_max if up else a_min
+    square = J * (v1 - v0) + 0.5 * (a0 * a0 + a1 * a1)
+    peak = math.copysign(math.sqrt(max(square, 0.0)), J)
+    hold = 0.0
+    if (peak - limit) * J > 0.0:
+        peak = limit
+        hold = (v1 - v0 - (2.0 * peak * peak - a0 * a0 - a1 * a1) / (2.0 * J)) / peak
+    return [((peak - a0) / J, J), (hold, 0.0), ((peak - a1) / J, -J)]
+
+
+def _with_cruise(problem, up):
+    """The profiles of direction ``up`` that cruise at the velocity limit (phase 4 > 0)."""
+    lim = problem.limits
+    vU, aU, aL, J = lim.oriented(up)
+    accelerate = velocity_change(problem.v0, problem.a0, vU, 0.0, lim.a_max, lim.a_min, lim.j_max)
+    decelerate = velocity_change(vU, 0.0, problem.vf, problem.af, lim.a_max, lim.a_min, lim.j_max)
+    # Only the up-then-down velocity changes belong to this direction's seven phases.
+    if accelerate[0][1] != J and accelerate[0][0] > problem.tol_t or decelerate[0][1] != -J and decelerate[0][0] > problem.tol_t:
+        return None
+    durations = [accelerate[0][0], accelerate[1][0], accelerate[2][0], 0.0,
+                 decelerate[0][0], decelerate[1][0], decelerate[2][0]]
+    jerks = [J, 0.0, -J, 0.0, -J, 0.0, J]
+    without = Phases(problem.p0, problem.v0, problem.a0, durations, jerks)
+    durations[3] = (problem.pf - without.p[-1]) / vU
+    if durations[3] <= problem.tol_t:
+        return None
+    return problem.accept(durations, jerks)
+
+
+def _without_cruise(problem, up):
+    """The profiles of direction ``up`` whose acceleration passes zero without a cruise."""
+    lim = problem.limits
+    _, aU, aL, J = lim.oriented(up)
+    a0, v0, af, vf, pd = problem.a0, problem.v0, problem.af, problem.vf, problem.pd
+    J2, J3, J4 = J * J, J * J * J, J ** 4
+    jerks = [J, 0.0, -J, 0.0, -J, 0.0, J]
+    found = []
+    u_high = (aU - aL) / J  # a1 - a5 = J u cannot exceed the span of the acceleration limits
+    # Neither acceleration limit: u^2 (u^4 + c2 u^2 + c1 u + c0) = 0.
+    K = J * (vf - v0) + 0.5 * (a0 * a0 - af * af)
+    quartic = [1.0, 0.0, 2.0 * (2.0 * J * (v0 + vf) - a0 * a0 - af * af) / J2,
+               -4.0 * (3.0 * J2 * pd + 3.0 * J * (a0 * v0 - af * vf) - a0 ** 3 + af ** 3) / (3.0 * J3),
+               -(2.0 * J * (v0 - vf) - a0 * a0 + af * af) ** 2 / (4.0 * J4)]
+    for u in real_roots(quartic, 0.0, u_high):
+        if u <= 0.0:
+            continue
+        a1 = 0.5 * (J * u + K / (J * u))
+        a5 = a1 - J * u
+        found.append(problem.accept([(a1 - a0) / J, 0.0, u, 0.0, 0.0, 0.0, (af - a5) / J], jerks))
+    # a_max held (phase 2), a5 = aU - J u.
+    c0 = (-24 * J2 * aU * pd - 12 * J2 * v0 * v0 + 12 * J2 * vf * vf + 12 * J * a0 * a0 * v0 - 24 * J * a0 * aU * v0
+          + 12 * J * aU * aU * v0 - 12 * J * aU * aU * vf + 24 * J * aU * af * vf - 12 * J * af * af * vf - 3 * a0 ** 4
+          + 8 * a0 ** 3 * aU - 6 * a0 * a0 * aU * aU + 6 * aU * aU * af * af - 8 * aU * af ** 3 + 3 * af ** 4)
+    quartic = [12 * J4, -24 * J3 * aU, 12 * J2 * (2 * J * vf + aU * aU - af * af), 0.0, c0]
+    for u in real_roots(quartic, 0.0, u_high):
+        t2 = (2 * J2 * u * u - 4 * J * aU * u - 2 * J * v0 + 2 * J * vf + a0 * a0 - af * af) / (2 * J * aU)
+        a5 = aU - J * u
+        found.append(problem.accept([(aU - a0) / J, t2, u, 0.0, 0.0, 0.0, (af - a5) / J], jerks))
+    # a_min held (phase 6), a1 = aL + J u.
+    c0 = (-24 * J2 * aL * pd - 12 * J2 * v0 * v0 + 12 * J2 * vf * vf + 12 * J * a0 * a0 * v0 - 24 * J * a0 * aL * v0
+          + 12 * J * aL * aL * v0 - 12 * J * aL * aL * vf + 24 * J * aL * af * vf - 12 * J * af * af * vf - 3 * a0 ** 4
+          + 8 * a0 ** 3 * aL - 6 * a0 * a0 * aL * aL + 6 * aL * aL * af * af - 8 * aL * af ** 3 + 3 * af ** 4)
+    quartic = [-12 * J4, -24 * J3 * aL, -12 * J2 * (2 * J * v0 - a0 * a0 + aL * aL), 0.0, c0]
+    for u in real_roots(quartic, 0.0, u_high):
+        t6 = -(2 * J2 * u * u + 4 * J * aL * u + 2 * J * v0 - 2 * J * vf - a0 * a0 + af * af) / (2 * J * aL)
+        a1 = aL + J * u
+        found.append(problem.accept([(a1 - a0) / J, 0.0, u, 0.0, 0.0, t6, (af - aL) / J], jerks))
+    # Both held: a quadratic in t2.
+    q2 = 12 * J2 * aU * (aL - aU)
+    q1 = 12 * J * (aL - aU) * (2 * J * v0 - a0 * a0 - aL * aU + 2 * aU * aU)
+    q0 = (-24 * J2 * aL * pd - 12 * J2 * v0 * v0 + 12 * J2 * vf * vf + 12 * J * a0 * a0 * v0 - 24 * J * a0 * aL * v0
+          - 12 * J * aL * aL * v0 - 12 * J * aL * aL * vf + 48 * J * aL * aU * v0 + 24 * J * aL * af * vf
+          - 24 * J * aU * aU * v0 - 12 * J * af * af * vf - 3 * a0 ** 4 + 8 * a0 ** 3 * aL + 6 * a0 * a0 * aL * aL
+          - 24 * a0 * a0 * aL * aU + 12 * a0 * a0 * aU * aU - 12 * aL * aL * aU * aU + 6 * aL * aL * af * af
+          + 24 * aL * aU ** 3 - 8 * aL * af ** 3 - 12 * aU ** 4 + 3 * af ** 4)
+    for t2 in _quadratic_roots(q2, q1, q0):
+        t6 = -(2 * J * aU * t2 + 2 * J * v0 - 2 * J * vf - a0 * a0 - 2 * aL * aL + 2 * aU * aU + af * af) / (2 * J * aL)
+        found.append(problem.accept([(aU - a0) / J, t2, (aU - aL) / J, 0.0, 0.0, t6, (af - aL) / J], jerks))
+    return [phases for phases in found if phases is not None]
+
+
+def _quadratic_roots(a, b, c):
+    if a == 0.0:
+        return [] if b == 0.0 else [-c / b]
+    discriminant = b * b - 4.0 * a * c
+    if discriminant < 0.0:
+        return []
+    # The cancellation-free pair: q = -(b + sign(b) sqrt(D)) / 2, roots q / a and c / q.
+    q = -0.5 * (b + math.copysign(math.sqrt(discriminant), b))
+    return [q / a] if q == 0.0 else [q / a, c / q]
+
+
+def extremal_profiles(problem):
+    """Every seven-phase profile (both directions, every set of limits reached) that takes the
+    axis to its target within the limits, shortest first, near-duplicates removed."""
+    found = []
+    for up in (True, False):
+        cruise = _with_cruise(problem, up)
+        if cruise is not None:
+            found.append(cruise)
+        found.extend(_without_cruise(problem, up))
+    if problem.pd == 0.0 and problem.v0 == problem.vf == 0.0 and problem.a0 == problem.af == 0.0:
+        found.append(Phases(problem.p0, 0.0, 0.0, [0.0] * 7, [0.0] * 7))
+    found.sort(key=lambda phases: phases.duration)
+    distinct = []
+    for phases in found:
+        if not distinct or phases.duration - distinct[-1].duration > 1e3 * problem.tol_t:
+            distinct.append(phases)
+    return distinct
+
+
+class Block:
+    """The durations an axis can take: [t_min, inf) but for at most two open intervals."""
+
+    __slots__ = ("fastest", "intervals")
+
+    def __init__(self, fastest, intervals):
+        self.fastest = fastest          # Phases of the time-optimal profile
+        self.intervals = intervals      # [(left, right, Phases that lasts `right`)]
+
+    @property
+    def t_min(self):
+        return self.fastest.duration
+
+    def blocked(self, t):
+        return t < self.t_min or any(left < t < right for left, right, _ in self.intervals)
+
+    def profile_at(self, t):
+        """The extremal profile that lasts exactly t, if t is t_min or an interval's right end."""
+        if t == self.t_min:
+            return self.fastest
+        for _, right, phases in self.intervals:
+            if t == right:
+                return phases
+        return None
+
+
+def block(problem):
+    """The ``Block`` of one axis from its extremal profiles (the paper, Sec. IV-B): the shortest
+    is t_min; the others pair up into the blocked intervals between them. With two, the axis
+    cannot end between them (they are the two ends of one interval beginning at t_min)."""
+    profiles = extremal_profiles(problem)
+    if not profiles:
+        raise ValueError("unreachable target: no jerk-limited profile reaches it within the limits")
+    fastest, rest = profiles[0], profiles[1:]
+    if len(rest) == 1:
+        return Block(fastest, [(fastest.duration, rest[0].duration, rest[0])])
+    if len(rest) == 2:
+        return Block(fastest, [(rest[0].duration, rest[1].duration, rest[1])])
+    if len(rest) == 4:
+        return Block(fastest, [(rest[0].duration, rest[1].duration, rest[1]),
+                               (rest[2].duration, rest[3].duration, rest[3])])
+    if len(rest) == 3:  # two coincide at a tangency: keep the outer pair
+        return Block(fastest, [(rest[0].duration, rest[2].duration, rest[2])])
+    return Block(fastest, [])
+
+
+# ---------------------------------------------------------------------------------------------
+# Step 2: a profile of a prescribed duration
+
+
+def _hold_profile(problem, T, level, va):
+    """(position error, phases) of: velocity change to (va, level), a hold of the acceleration
+    ``level``, velocity change to the target, lasting T; None if the changes alone outlast T.
+
+    The hold's length h and the velocity vb = va + level h it ends with depend on each other
+    through the time of the second change; h = T - t_A - t_B(va + level h) is a contraction for
+    |level| < the acceleration limits (t_B changes by at most 1/a_limit per unit of velocity), so
+    the fixed-point iteration converges to the last bit.
+    """
+    lim = problem.limits
+    first = velocity_change(problem.v0, problem.a0, va, level, lim.a_max, lim.a_min, lim.j_max)
+    t_first = sum(t for t, _ in first)
+    hold = 0.0
+    for _ in range(100):
+        second = velocity_change(va + level * hold, level, problem.vf, problem.af, lim.a_max, lim.a_min, lim.j_max)
+        updated = T - t_first - sum(t for t, _ in second)
+        if updated < 0.0:
+            if updated < -problem.tol_t:
+                return None
+            updated = 0.0
+        if updated == hold or level == 0.0:
+            hold = updated
+            break
+        hold = updated
+    phases = Phases(problem.p0, problem.v0, problem.a0,
+                    [t for t, _ in first] + [hold] + [t for t, _ in second],
+                    [j for _, j in first] + [0.0] + [j for _, j in second])
+    return phases.p[-1] - problem.pf, phases
+
+
+def profile_of_duration(problem, T, near=None, samples=24):
+    """A profile of the axis lasting exactly T (>= its t_min, outside its blocked intervals).
+
+    It holds an acceleration level between two time-optimal velocity changes: a cruise (level 0)
+    first, else the level of the target's or the start's acceleration, one of the levels the
+    fastest profile ``near`` turns at (an axis whose acceleration never crosses zero near its
+    fastest move lengthens it by holding where it turns), then levels across the range. For each level, the velocity va at which the hold
+    starts is searched in [v_min, v_max] on a grid and at the velocities where the profile ``near``
+    (the axis's fastest) passes the level: just above t_min the answer is a small perturbation of
+    that profile, in a window of va narrower than any grid. Where the two changes leave time to
+    spare for the hold, the position error is compared between neighbours (the edges of that region
+    found by bisection), a sign change refined by bisection to the last bit, and the profile checked
+    like every other (``Problem.accept``).
+    """
+    lim = problem.limits
+    levels = [0.0, problem.af, problem.a0, 0.5 * (problem.a0 + problem.af)]
+    if near is not None:
+        levels += [a for a in near.a[1:-1] if a not in levels]
+    # Then levels across the range: the hold of an axis that ends turning hard can be anywhere.
+    levels += [lim.a_min + (lim.a_max - lim.a_min) * k / (2 * samples) for k in range(1, 2 * samples)]
+    seeds = {level: _passing_velocities(near, level) if near is not None else [] for level in levels}
+    for level in levels:
+        if not lim.a_min < level < lim.a_max and level != 0.0:
+            continue
+        edges, points = _hold_points(problem, T, level, seeds[level], samples)
+        errors = [(va, _hold_profile(problem, T, level, va)) for va in points]
+        for (va, first), (vb, second) in zip(errors, errors[1:]):
+            if first is None or second is None or first[0] * second[0] > 0.0:
+                continue
+            phases = _refine_hold(problem, T, level, va, vb, first)
+            accepted = phases and problem.accept(phases.durations, phases.jerks)
+            if accepted:
+                return accepted
+    return _meeting_profile(problem, T, samples)
+
+
+def _hold_points(problem, T, level, seeds, samples):
+    """(edges, points): the velocities va where the two changes around a hold at ``level`` take
+    exactly T (edges), and those plus the grid points where they take less (points)."""
+    lim = problem.limits
+    grid = [lim.v_min + (lim.v_max - lim.v_min) * k / samples for k in range(samples + 1)]
+    grid = sorted(set(grid + seeds))
+    spare = [_hold_time(problem, level, va) <= T for va in grid]
+    points, edges = [], []
+    for k, va in enumerate(grid):
+        if spare[k]:
+            points.append(va)
+        if k + 1 < len(grid) and spare[k] != spare[k + 1]:
+            inside, outside = (va, grid[k + 1]) if spare[k] else (grid[k + 1], va)
+            edges.append(_edge(lambda v: _hold_time(problem, level, v), T, inside, outside))
+    return edges, sorted(points + edges)
+
+
+def _meeting_profile(problem, T, samples):
+    """The last resort of ``profile_of_duration``: two velocity changes that meet, without a
+    hold, at an acceleration level and take exactly T together (the profiles whose acceleration
+    bends back, UDUD in the paper). For each level of a grid the meeting velocities are the edges
+    of ``_hold_points``; they trace curves over the level, along which the position error is
+    continuous: an edge is followed to the nearest edge of the next level, and a sign change of
+    the error is refined by bisection on the level."""
+    lim = problem.limits
+    span = lim.v_max - lim.v_min
+    levels = [lim.a_min + (lim.a_max - lim.a_min) * k / (2 * samples) for k in range(1, 2 * samples)]
+    table = [_hold_points(problem, T, level, [], samples)[0] for level in levels]
+    for k in range(len(levels) - 1):
+        for va in table[k]:
+            nearest = min(table[k + 1], key=lambda vb: abs(vb - va), default=None)
+            if nearest is None or abs(nearest - va) > 0.1 * span:
+                continue
+            phases = _bisect_meeting(problem, T, samples, (levels[k], va), (levels[k + 1], nearest))
+            accepted = phases and problem.accept(phases.durations, phases.jerks)
+            if accepted:
+                return accepted
+    return None
+
+
+def _bisect_meeting(problem, T, samples, low, high):
+    """The meeting profile where the position error changes sign between the curve points
+    ``low`` and ``high`` (level, meeting velocity), or None if it does not."""
+    first, second = _hold_profile(problem, T, low[0], low[1]), _hold_profile(problem, T, high[0], high[1])
+    if first is None or second is None or first[0] * second[0] > 0.0:
+        return None
+    error_low, phases = first
+    for _ in range(100):
+        level = 0.5 * (low[0] + high[0])
+        if level in (low[0], high[0]):
+            break
+        guess = 0.5 * (low[1] + high[1])
+        edges = _hold_points(problem, T, level, [], samples)[0]
+        if not edges:
+            return None
+        va = min(edges, key=lambda v: abs(v - guess))
+        result = _hold_profile(problem, T, level, va)
+        if result is None:
+            return None
+        error, phases = result
+        if (error < 0.0) == (error_low < 0.0):
+            low, error_low = (level, va), error
+        else:
+            high = (level, va)
+    return phases
+
+
+def _passing_velocities(phases, level):
+    """Velocities of ``phases`` where its acceleration equals ``level`` (passing or holding)."""
+    found = []
+    for k, (t, j) in enumerate(zip(phases.durations, phases.jerks)):
+        a0, a1 = phases.a[k], phases.a[k + 1]
+        if j != 0.0 and min(a0, a1) <= level <= max(a0, a1):
+            s = (level - a0) / j
+            found.append(phases.v[k] + s * (a0 + s * j / 2.0))
+        elif j == 0.0 and t > 0.0 and a0 == level:
+            found.append(phases.v[k])
+    return found
+
+
+def _hold_time(problem, level, va):
+    """Time of the two velocity changes around a hold of zero length starting at va."""
+    lim = problem.limits
+    return (sum(t for t, _ in velocity_change(problem.v0, problem.a0, va, level, lim.a_max, lim.a_min, lim.j_max))
+            + sum(t for t, _ in velocity_change(va, level, problem.vf, problem.af, lim.a_max, lim.a_min, lim.j_max)))
+
+
+def _edge(busy, T, inside, outside):
+    """The point between ``inside`` (busy <= T) and ``outside`` where busy reaches T."""
+    for _ in range(100):
+        middle = 0.5 * (inside + outside)
+        if middle in (inside, outside):
+            break
+        if busy(middle) <= T:
+            inside = middle
+        else:
+            outside = middle
+    return inside
+
+
+def _refine_hold(problem, T, level, low, high, result_low):
+    error_low, phases = result_low
+    for _ in range(200):
+        middle = 0.5 * (low + high)
+        if middle in (low, high) or error_low == 0.0:
+            break
+        result = _hold_profile(problem, T, level, middle)
+        if result is None:
+            return None
+        error, phases = result
+        if (error < 0.0) == (error_low < 0.0):
+            low, error_low = middle, error
+        else:
+            high = middle
+    return phases
