@@ -284,7 +284,7 @@ def _without_cruise(problem, up):
             continue
         a1 = 0.5 * (J * u + K / (J * u))
         a5 = a1 - J * u
-        found.append(problem.accept([(a1 - a0) / J, 0.0, u, 0.0, 0.0, 0.0, (af - a5) / J], jerks))
+        found.append(problem.accept([(a1 - a0) / J, 0.0, *_through_zero(a1, a5, J), 0.0, (af - a5) / J], jerks))
     # a_max held (phase 2), a5 = aU - J u.
     c0 = (-24 * J2 * aU * pd - 12 * J2 * v0 * v0 + 12 * J2 * vf * vf + 12 * J * a0 * a0 * v0 - 24 * J * a0 * aU * v0
           + 12 * J * aU * aU * v0 - 12 * J * aU * aU * vf + 24 * J * aU * af * vf - 12 * J * af * af * vf - 3 * a0 ** 4
@@ -293,7 +293,7 @@ def _without_cruise(problem, up):
     for u in real_roots(quartic, 0.0, u_high):
         t2 = (2 * J2 * u * u - 4 * J * aU * u - 2 * J * v0 + 2 * J * vf + a0 * a0 - af * af) / (2 * J * aU)
         a5 = aU - J * u
-        found.append(problem.accept([(aU - a0) / J, t2, u, 0.0, 0.0, 0.0, (af - a5) / J], jerks))
+        found.append(problem.accept([(aU - a0) / J, t2, *_through_zero(aU, a5, J), 0.0, (af - a5) / J], jerks))
     # a_min held (phase 6), a1 = aL + J u.
     c0 = (-24 * J2 * aL * pd - 12 * J2 * v0 * v0 + 12 * J2 * vf * vf + 12 * J * a0 * a0 * v0 - 24 * J * a0 * aL * v0
           + 12 * J * aL * aL * v0 - 12 * J * aL * aL * vf + 24 * J * aL * af * vf - 12 * J * af * af * vf - 3 * a0 ** 4
@@ -302,7 +302,7 @@ def _without_cruise(problem, up):
     for u in real_roots(quartic, 0.0, u_high):
         t6 = -(2 * J2 * u * u + 4 * J * aL * u + 2 * J * v0 - 2 * J * vf - a0 * a0 + af * af) / (2 * J * aL)
         a1 = aL + J * u
-        found.append(problem.accept([(a1 - a0) / J, 0.0, u, 0.0, 0.0, t6, (af - aL) / J], jerks))
+        found.append(problem.accept([(a1 - a0) / J, 0.0, *_through_zero(a1, aL, J), t6, (af - aL) / J], jerks))
     # Both held: a quadratic in t2.
     q2 = 12 * J2 * aU * (aL - aU)
     q1 = 12 * J * (aL - aU) * (2 * J * v0 - a0 * a0 - aL * aU + 2 * aU * aU)
@@ -313,8 +313,16 @@ def _without_cruise(problem, up):
           + 24 * aL * aU ** 3 - 8 * aL * af ** 3 - 12 * aU ** 4 + 3 * af ** 4)
     for t2 in _quadratic_roots(q2, q1, q0):
         t6 = -(2 * J * aU * t2 + 2 * J * v0 - 2 * J * vf - a0 * a0 - 2 * aL * aL + 2 * aU * aU + af * af) / (2 * J * aL)
-        found.append(problem.accept([(aU - a0) / J, t2, (aU - aL) / J, 0.0, 0.0, t6, (af - aL) / J], jerks))
+        found.append(problem.accept([(aU - a0) / J, t2, *_through_zero(aU, aL, J), t6, (af - aL) / J], jerks))
     return [phases for phases in found if phases is not None]
+
+
+def _through_zero(a1, a5, J):
+    """Phases 3, 4, 5 of a ramp from a1 to a5 at jerk -J: split where the acceleration passes
+    zero (phase 4, of zero length, is where a cruise would go), else all of it in phase 3."""
+    if a1 * J > 0.0 and a5 * J < 0.0:
+        return a1 / J, 0.0, -a5 / J
+    return (a1 - a5) / J, 0.0, 0.0
 
 
 def _quadratic_roots(a, b, c):

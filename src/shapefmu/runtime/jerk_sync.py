@@ -31,39 +31,60 @@ def _state_problem(state, target, limits):
 
 
 def check_start_within(state, limits, name):
-    """Refuse a state from which the limits will be broken whatever the jerk (the velocity keeps
-    changing by a |a| / 2J while the acceleration is brought to zero)."""
-    _, v, a = state
-    if not limits.a_min <= a <= limits.a_max:
+    """The state with an acceleration within rounding (1e-9) of a limit put on the limit; refused
+    if the limits will be broken whatever the jerk (the velocity keeps changing by a |a| / 2J
+    while the acceleration is brought to zero)."""
+    p, v, a = state
+    a_tol = 1e-9 * max(limits.a_max, -limits.a_min)
+    v_tol = 1e-9 * max(limits.v_max, -limits.v_min)
+    if not limits.a_min - a_tol <= a <= limits.a_max + a_tol:
         raise ValueError(f"{name} acceleration must be in [{limits.a_min!r}, {limits.a_max!r}], got {a!r}")
+    a = min(max(a, limits.a_min), limits.a_max)
     reach = v + a * abs(a) / (2.0 * limits.j_max)
-    if not limits.v_min <= reach <= limits.v_max:
+    if not limits.v_min - v_tol <= reach <= limits.v_max + v_tol:
         raise ValueError(f"{name} velocity {v!r} with acceleration {a!r} reaches {reach!r} before the acceleration "
                          f"can be brought to zero; it must stay in [{limits.v_min!r}, {limits.v_max!r}]")
+    return p, v, a
+
+
+def rigid_blocks(states, targets, limits):
+    """([Problem], [Block]) of every axis (``jerk_profiles.block``)."""
+    problems = [_state_problem(s, t, lim) for s, t, lim in zip(states, targets, limits)]
+    return problems, [block(problem) for problem in problems]
+
+
+def profiles_lasting(problems, blocks, T, owner=None):
+    """[Phases] of every axis lasting exactly T (the ``owner`` axis keeps the extremal profile of
+    that length), or None if T is blocked for an axis or an axis has no such profile."""
+    if any(b.blocked(T) for b in blocks):
+        return None
+    out = []
+    for axis, (problem, b) in enumerate(zip(problems, blocks)):
+        if axis == owner:
+            phases = b.profile_at(T)
+        elif T - b.t_min <= problem.tol_t:
+            phases = b.fastest
+        else:
+            phases = profile_of_duration(problem, T, b.fastest)
+        if phases is None:
+            return None
+        out.append(phases)
+    return out
 
 
 def synchronise(states, targets, limits):
     """(T, [AxisMove]) of the time-synchronised move of every axis from ``states`` (p, v, a) to
     ``targets`` (p, v, a) within ``limits`` (``Limits`` per axis)."""
-    problems = [_state_problem(s, t, lim) for s, t, lim in zip(states, targets, limits)]
-    blocks = [block(problem) for problem in problems]
+    problems, blocks = rigid_blocks(states, targets, limits)
     candidates = sorted((t, axis) for axis, b in enumerate(blocks)
                         for t in [b.t_min] + [right for _, right, _ in b.intervals])
     floor = max(b.t_min for b in blocks)
     for T, owner in candidates:
-        if T < floor or any(b.blocked(T) for b in blocks):
+        if T < floor:
             continue
-        moves = []
-        for axis, (problem, b) in enumerate(zip(problems, blocks)):
-            if axis == owner:
-                moves.append(AxisMove(b.profile_at(T), True))
-                continue
-            phases = b.fastest if T - b.t_min <= problem.tol_t else profile_of_duration(problem, T, b.fastest)
-            if phases is None:
-                break
-            moves.append(AxisMove(phases, False))
-        else:
-            return T, moves
+        phases = profiles_lasting(problems, blocks, T, owner)
+        if phases is not None:
+            return T, [AxisMove(p, axis == owner) for axis, p in enumerate(phases)]
     raise ValueError("unreachable target: no common duration found in which every axis reaches its target "
                      "within its limits")
 
@@ -103,7 +124,7 @@ def straight_line(states, targets, limits):
     path_limits = Limits(v_max, a_max, j_max, v_min, a_min)
     start = (0.0, path_state[0], path_state[1])
     end = (length, path_target[0], path_target[1])
-    check_start_within(start, path_limits, "path")
+    start = check_start_within(start, path_limits, "path")
     T, (path,) = synchronise([start], [end], [path_limits])
     moves = []
     for s, x in zip(states, direction):

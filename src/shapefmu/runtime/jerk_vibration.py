@@ -1,0 +1,334 @@
+"""Residual vibration of a flexible mode after a jerk-limited move, and moves that keep it under a
+bound (standard library only).
+
+The mode. A mode (omega, zeta) carried by an axis obeys y'' + 2 sigma y' + omega^2 y = -a(t),
+sigma = zeta omega, with a(t) the axis's acceleration. Before the move the acceleration has held
+its initial value a0 (jerk 0), so the mode sits at its quasi-static deflection -a0 / omega^2 and does
+not ring. While the acceleration is linear in time, a = alpha + beta t, the deflection is the
+quasi-static y_p = -(alpha + beta t) / omega^2 + 2 sigma beta / omega^4 plus a free oscillation; a
+jump of the jerk by dj changes y_p and y_p' by 2 sigma dj / omega^4 and -dj / omega^2, and the free
+oscillation takes the opposite jump. Written as the complex amplitude w = e - i (e' + sigma e) /
+omega_d of the free part e (which evolves as w e^{s t}, s = -sigma + i omega_d), each jump adds
+dj kappa with |kappa| = 1 / (omega^2 omega_d). So after a move of duration T whose jerk steps by
+dj_k at the instants t_k (the start, every phase boundary and the end, where the jerk returns to 0)
+the mode rings about its new quasi-static deflection with amplitude
+
+    A(omega) = |S(omega)| / (omega^2 omega_d),   S(omega) = sum_k dj_k e^{s (T - t_k)}.
+
+This is the impulse-shaper residual of Singer & Seering with the jerk steps as the impulses.
+
+The measure. "The residual after the move, percent of the unshaped one" is here
+
+    V = max over the band of A_move(omega) / max over the band of A_rigid(omega),
+
+A_rigid that of the time-optimal rigid move (the Ruckig-equal one) from the same state to the same
+target, the band [f (1 - delta), f (1 + delta)]. A ratio per frequency, A_move / A_rigid, would divide
+by zero where the rigid move happens to leave no vibration (its jerk steps cancel at some frequency
+of the band); the worst case over the band of each keeps the reference finite wherever the rigid
+move rings at all. A shaper with residual V_s(omega) <= vtol on the band, convolved with the rigid
+jerk, leaves V_s(omega) A_rigid(omega) <= vtol max A_rigid: it meets the bound.
+
+The moves. ``shaped_phases`` convolves an axis's jerk with an impulse shaper (that is what "Ruckig
+followed by a shaper" means from a moving start: the shaper filters the jerk, so the shaped move
+leaves from the same position, velocity and acceleration with the jerk and acceleration within the
+rigid move's; the rigid target is corrected, by a fixed point, so that the shaped move ends in the
+target). ``cancel`` is the planner's own: it keeps the phases of the rigid move, inserts in its
+longest hold a jerk doublet (-J, +J) per frequency to cancel, and solves the phase durations for a
+duration T: final acceleration, velocity, position, the sum of durations, and S = 0 at every design
+frequency (the band's centre, and its two ends when delta > 0), by Gauss-Newton steps of least norm
+from the rigid phases. The planner tries increasing T from the rigid duration and keeps the first
+move that passes the exact checks (limits, end state, the bound over the band).
+"""
+
+import cmath
+import math
+
+from .jerk_profiles import Phases
+from .least_squares import solve_least_squares
+
+# Frequencies per unit of (band width in rad/s) x (move time) at which the band is checked: the
+# phase of S turns by about that product across the band, so 20 points per radian resolve it.
+_BAND_POINTS_PER_RADIAN = 20.0
+_MAX_BAND_POINTS = 401
+
+
+class Mode:
+    """A mode (omega rad/s, zeta) with its band (+- delta, a fraction of omega) and bound vtol."""
+
+    __slots__ = ("omega", "zeta", "delta", "vtol")
+
+    def __init__(self, omega, zeta, delta=0.0, vtol=0.01):
+        self.omega, self.zeta, self.delta, self.vtol = omega, zeta, delta, vtol
+
+    def band(self, duration):
+        """The frequencies at which the band is checked for a move lasting ``duration``."""
+        if self.delta == 0.0:
+            return [self.omega]
+        width = 2.0 * self.delta * self.omega
+        count = min(_MAX_BAND_POINTS, max(9, int(math.ceil(width * duration * _BAND_POINTS_PER_RADIAN)) + 1))
+        low = self.omega * (1.0 - self.delta)
+        return [low + width * k / (count - 1) for k in range(count)]
+
+    def design_equations(self):
+        """[(omega, zeta, order)]: S = 0 (order 0) at the centre for a single frequency; for a
+        band, at two frequencies 0.6 delta either side of it (as the extra-insensitive shaper
+        places its zeros, leaving a hump in the middle that the planner checks)."""
+        if self.delta == 0.0:
+            return [(self.omega, self.zeta, 0)]
+        return [(self.omega * (1.0 + x * self.delta), self.zeta, 0) for x in (-0.6, 0.6)]
+
+
+def jerk_sum(durations, jerks, T, omega, zeta, ringing=None):
+    """S(omega) of the module docstring for phases of ``durations`` and ``jerks`` lasting T.
+
+    ``ringing(omega, zeta)``, if given, is S of the jerk steps before the start, seen at the
+    start (a move re-planned while the mode still rings from the move before): it decays and
+    turns with the mode, e^{s T}, and adds to the steps of this move."""
+    sigma = zeta * omega
+    s = complex(-sigma, omega * math.sqrt(1.0 - zeta * zeta))
+    total = ringing(omega, zeta) * cmath.exp(s * T) if ringing is not None else 0j
+    previous, t = 0.0, 0.0
+    for d, j in zip(durations, jerks):
+        if j != previous:
+            total += (j - previous) * cmath.exp(s * (T - t))
+            previous = j
+        t += d
+    if previous != 0.0:
+        total -= previous * cmath.exp(s * (T - t))
+    return total
+
+
+def amplitude(durations, jerks, T, omega, zeta, ringing=None):
+    """A(omega): the amplitude the mode rings with after the move (module docstring)."""
+    omega_d = omega * math.sqrt(1.0 - zeta * zeta)
+    return abs(jerk_sum(durations, jerks, T, omega, zeta, ringing)) / (omega * omega * omega_d)
+
+
+def worst_amplitude(phases, T, mode, ringing=None):
+    """The largest A(omega) over the mode's band for ``phases`` ending at T."""
+    return max(amplitude(phases.durations, phases.jerks, T, omega, mode.zeta, ringing) for omega in mode.band(T))
+
+
+def padded(phases, T):
+    """``phases`` followed by a hold of the final state up to T (an axis that arrives early)."""
+    rest = T - phases.duration
+    if rest <= 0.0:
+        return phases
+    return Phases(phases.p[0], phases.v[0], phases.a[0], phases.durations + [rest], phases.jerks + [0.0])
+
+
+# ---------------------------------------------------------------------------------------------
+# Ruckig followed by a shaper: the rigid jerk convolved with impulses
+
+
+def convolve_jerk(phases, times, amplitudes):
+    """Phases of the jerk sum_i A_i j(t - t_i) from the same start state."""
+    edges = [0.0]
+    for d in phases.durations:
+        edges.append(edges[-1] + d)
+    cuts = sorted({e + t for e in edges for t in times})
+    span = max(cuts[-1] - cuts[0], 1e-300)
+    merged = [cuts[0]]
+    for c in cuts[1:]:
+        if c - merged[-1] > 1e-13 * span:
+            merged.append(c)
+    durations, jerks = [], []
+    for left, right in zip(merged, merged[1:]):
+        middle = 0.5 * (left + right)
+        j = 0.0
+        for t, A in zip(times, amplitudes):
+            local = middle - t
+            if 0.0 <= local < edges[-1]:
+                j += A * phases.jerks[_index(edges, local)]
+        durations.append(right - left)
+        jerks.append(j)
+    return Phases(phases.p[0], phases.v[0], phases.a[0], durations, jerks)
+
+
+def _index(edges, t):
+    low, high = 0, len(edges) - 2
+    while low < high:
+        middle = (low + high + 1) // 2
+        if edges[middle] <= t:
+            low = middle
+        else:
+            high = middle - 1
+    return low
+
+
+# ---------------------------------------------------------------------------------------------
+# The planner's own: cancel S at the design frequencies by solving the phase durations
+
+
+def _with_doublets(phases, count, j_max, tau):
+    """The phases with ``count`` jerk doublets (-s J, +s J) of ramps ``tau`` inserted in the
+    longest holds (a hold at positive acceleration, or a positive cruise, dips down: s = +1)."""
+    durations, jerks = list(phases.durations), list(phases.jerks)
+    accelerations, velocities = list(phases.a), list(phases.v)
+    for _ in range(count):
+        holds = [k for k, j in enumerate(jerks) if j == 0.0]
+        if holds:
+            k = max(holds, key=lambda i: durations[i])
+        else:  # no hold: insert one of zero length where the longest phase ends
+            k = max(range(len(durations)), key=lambda i: durations[i]) + 1
+            durations.insert(k, 0.0)
+            jerks.insert(k, 0.0)
+            accelerations.insert(k, accelerations[k])
+            velocities.insert(k, velocities[k])
+        a, v = accelerations[k], velocities[k]
+        sign = 1.0 if (a > 0.0 or (a == 0.0 and v >= 0.0)) else -1.0
+        half = 0.5 * durations[k]
+        durations[k:k + 1] = [half, tau, tau, half]
+        jerks[k:k + 1] = [0.0, -sign * j_max, sign * j_max, 0.0]
+        accelerations[k:k + 1] = [a, a, a - sign * j_max * tau, a]
+        velocities[k:k + 1] = [v, v, v, v]
+    return durations, jerks
+
+
+def _held_limits(durations, jerks, start, limits):
+    """[(phase index, 'a' or 'v', level)] of the holds of the phases that sit on a limit: the
+    solve keeps them there, so that no limit is crossed where the rigid move touched it."""
+    phases = Phases(start[0], start[1], start[2], durations, jerks)
+    tol_a = 1e-9 * max(limits.a_max, -limits.a_min)
+    tol_v = 1e-9 * max(limits.v_max, -limits.v_min)
+    held = []
+    for k, j in enumerate(jerks):
+        if j != 0.0:
+            continue
+        for level in (limits.a_max, limits.a_min):
+            if abs(phases.a[k] - level) <= tol_a:
+                held.append((k, "a", level))
+        for level in (limits.v_max, limits.v_min):
+            if abs(phases.a[k]) <= tol_a and abs(phases.v[k] - level) <= tol_v:
+                held.append((k, "v", level))
+    return held
+
+
+def _equations(durations, jerks, start, target, T, frequencies, scales, held, ringing):
+    """(F, Jacobian columns): the scaled equations of ``cancel`` and their exact derivatives with
+    respect to every duration. Lengthening phase k by dt inserts dt of its jerk where it ends:
+    the end state moves by Phi(R_k) (v_k, a_k, j_k) dt (R_k the time left after it, Phi the
+    triple integrator's flow), and every jerk step after it comes dt later, d e^{s (T - t)} =
+    -s e^{s (T - t)} dt."""
+    phases = Phases(start[0], start[1], start[2], durations, jerks)
+    n = len(durations)
+    ends = phases.ends
+    total = ends[-1]
+    F = [(phases.a[-1] - target[2]) / scales[0], (phases.v[-1] - target[1]) / scales[1],
+         (phases.p[-1] - target[0]) / scales[2], (total - T) / scales[3]]
+    columns = [[0.0] * 4 for _ in range(n)]
+    for k in range(n):
+        R = total - ends[k + 1]
+        dv, da, dj = phases.v[k + 1], phases.a[k + 1], jerks[k]
+        columns[k][0] = dj / scales[0]
+        columns[k][1] = (da + dj * R) / scales[1]
+        columns[k][2] = (dv + da * R + dj * R * R / 2.0) / scales[2]
+        columns[k][3] = 1.0 / scales[3]
+    for m, kind, level in held:
+        if kind == "a":
+            F.append((phases.a[m] - level) / scales[0])
+        else:
+            F.append((phases.v[m] - level) / scales[1])
+        for k in range(n):
+            if k >= m:
+                columns[k].append(0.0)
+            elif kind == "a":
+                columns[k].append(jerks[k] / scales[0])
+            else:
+                columns[k].append((phases.a[k + 1] + jerks[k] * (ends[m] - ends[k + 1])) / scales[1])
+    for omega, zeta, order in frequencies:
+        s = complex(-zeta * omega, omega * math.sqrt(1.0 - zeta * zeta))
+        ds = complex(-zeta, math.sqrt(1.0 - zeta * zeta))  # d s / d omega
+        # Steps dj_i at the starts of the phases and at the end, at the instants t_i.
+        steps, instants, previous = [], [], 0.0
+        for k in range(n + 1):
+            level = jerks[k] if k < n else 0.0
+            steps.append((level - previous) * cmath.exp(s * (T - ends[k])))
+            instants.append(T - ends[k])
+            previous = level
+        # The order-th derivative in omega, per unit of T^order: sum dj_i (r_i ds / T)^order e^{s r_i},
+        # r_i = T - t_i; moving t_i by dt changes each term by -(order ds / T (r_i ds / T)^(order-1)
+        # + s (r_i ds / T)^order) e^{s r_i} dt.
+        powers = [(r * ds / T) ** order for r in instants]
+        value = sum(step * w for step, w in zip(steps, powers))
+        if order == 0 and ringing is not None:
+            value += ringing(omega, zeta) * cmath.exp(s * T)
+        shifted = [-(order * ds / T * ((r * ds / T) ** (order - 1) if order else 0.0) + s * w) * step
+                   for step, w, r in zip(steps, powers, instants)]
+        F += [value.real / scales[4], value.imag / scales[4]]
+        tail = 0j
+        tails = [0j] * n
+        for k in range(n - 1, -1, -1):
+            tail += shifted[k + 1]
+            tails[k] = tail / scales[4]
+        for k in range(n):
+            columns[k] += [tails[k].real, tails[k].imag]
+    return F, columns
+
+
+def cancel(start, target, limits, T, modes, rigid, ringing=None, frequencies=None, doublets=True, iterations=40):
+    """Durations and jerks of ``rigid``'s phases plus doublets that end in ``target`` at T with
+    S = 0 at every design frequency of ``modes`` (module docstring), or None if Gauss-Newton
+    fails. ``frequencies`` [(omega, zeta, order)] replaces the modes' design equations; without
+    ``doublets`` the phases of ``rigid`` (a shaped move) are re-timed as they are."""
+    if frequencies is None:
+        frequencies = [equation for mode in modes for equation in mode.design_equations()]
+    j_max = limits.j_max
+    S_rigid = max(abs(jerk_sum(rigid.durations, rigid.jerks, rigid.duration, w, z, ringing))
+                  for w, z, _ in frequencies)
+    omega_low = min(w for w, _, _ in frequencies)
+    tau = math.sqrt(S_rigid / (j_max * omega_low * omega_low) / len(frequencies)) if S_rigid > 0.0 else 0.0
+    if doublets:
+        durations, jerks = _with_doublets(padded(rigid, T), len(frequencies), j_max, tau)
+    else:
+        durations, jerks = list(rigid.durations), list(rigid.jerks)
+    held = _held_limits(durations, jerks, start, limits)
+    v_scale = max(limits.v_max, -limits.v_min)
+    a_scale = max(limits.a_max, -limits.a_min)
+    scales = (a_scale, v_scale, v_scale * T, T, max(S_rigid, j_max * 1e-12))
+    x = list(durations)
+    F, columns = _equations(x, jerks, start, target, T, frequencies, scales, held, ringing)
+    norm = math.sqrt(math.fsum(f * f for f in F))
+    for _ in range(iterations):
+        if norm < 1e-14:
+            break
+        # Durations at zero that the step would make negative stay at zero (an active set).
+        frozen = set()
+        while True:
+            step = _least_norm_step([[0.0] * len(F) if k in frozen else c for k, c in enumerate(columns)], F)
+            if step is None:
+                return None
+            blocked = {k for k, (xk, dk) in enumerate(zip(x, step)) if xk <= 0.0 and dk < 0.0} - frozen
+            if not blocked:
+                break
+            frozen |= blocked
+        # Halve the step until the residual falls; no duration may turn negative.
+        factor = 1.0
+        for _ in range(30):
+            trial = [max(xi + factor * dx, 0.0) for xi, dx in zip(x, step)]
+            if sum(trial) > 2.0 * T:  # a step far off the duration: shorten it
+                factor *= 0.5
+                continue
+            F_trial, columns_trial = _equations(trial, jerks, start, target, T, frequencies, scales, held, ringing)
+            norm_trial = math.sqrt(math.fsum(f * f for f in F_trial))
+            if norm_trial < norm:
+                x, F, columns, norm = trial, F_trial, columns_trial, norm_trial
+                break
+            factor *= 0.5
+        else:
+            break
+    return (x, jerks) if norm < 1e-11 else None
+
+
+def _least_norm_step(columns, F):
+    """dx of least norm with J dx = -F (J given by its columns, one per duration; m <= n)."""
+    n, m = len(columns), len(F)
+    # J J^T y = -F, dx = J^T y; a tiny Levenberg term keeps J J^T invertible.
+    JJt = [[math.fsum(columns[k][i] * columns[k][j] for k in range(n)) for j in range(m)] for i in range(m)]
+    trace = max(sum(JJt[i][i] for i in range(m)), 1e-300)
+    for i in range(m):
+        JJt[i][i] += 1e-13 * trace
+    y = solve_least_squares(JJt, [-f for f in F])
+    if y is None:
+        return None
+    return [math.fsum(columns[k][i] * y[i] for i in range(m)) for k in range(n)]
