@@ -8,6 +8,7 @@
     shapefmu plant build models/disk_drive.toml -o fmus/DiskDrive.fmu
     shapefmu optimal models/disk_drive.toml --distance X [--u-max U] [--plot out.png] [--json s.json] [--csv u.csv]
     shapefmu stos models/disk_drive.toml --distance X --shaper simultaneous [--ts S] [--plot out.png]
+    shapefmu motion plan --axis NAME:FROM:TO:VMAX:AMAX:JMAX ... --mode [AXIS:]HZ:ZETA ... [--band B] [--vtol V] [--json] [--out traj.csv]
     shapefmu build [all | shaper --kind KIND --mode HZ[:ZETA] ... -o fmus/X.fmu]
     shapefmu build reference solution.json|table.csv [--interpolation hold|linear] -o fmus/TimeOptimal.fmu
     shapefmu build shape-filter --kind WINDOW|TWIN-PULSE|time-frequency --mode HZ[:ZETA] [--order N] [--ts S] -o fmus/X.fmu
@@ -39,12 +40,12 @@ import zipfile
 import zlib
 
 from shapefmu import __version__
-from shapefmu.cli import build, design, identify, moves, plant, simulate, sweep
+from shapefmu.cli import build, design, identify, motion, moves, plant, simulate, sweep
 from shapefmu.cli.signals import exit_code, interrupts
 from shapefmu.cosim.errors import CosimError
 
 # The order of the groups in ``shapefmu --help``.
-COMMAND_GROUPS = (design, identify, plant, moves, build, sweep, simulate)
+COMMAND_GROUPS = (design, identify, plant, moves, motion, build, sweep, simulate)
 
 
 class _Parser(argparse.ArgumentParser):

@@ -1,0 +1,34 @@
+"""Ruckig (pip ``ruckig``, MIT) beside the planner: a test and benchmark peer, never a dependency.
+
+``ruckig_duration`` is None when ``ruckig`` is not installed; it plans the same rigid move with
+Ruckig's own code so that a command or a benchmark can print both side by side.
+"""
+
+from __future__ import annotations
+
+
+def ruckig_duration(states, targets, limits, straight=False):
+    """Ruckig's synchronised duration from ``states`` to ``targets`` [(p, v, a)] within ``limits``
+    (``AxisLimits`` or runtime ``Limits``), or None without ``ruckig``."""
+    try:
+        from ruckig import InputParameter, Result, Ruckig, Synchronization, Trajectory
+    except ImportError:
+        return None
+    n = len(states)
+    generator, request, trajectory = Ruckig(n), InputParameter(n), Trajectory(n)
+    request.current_position = [s[0] for s in states]
+    request.current_velocity = [s[1] for s in states]
+    request.current_acceleration = [s[2] for s in states]
+    request.target_position = [t[0] for t in targets]
+    request.target_velocity = [t[1] for t in targets]
+    request.target_acceleration = [t[2] for t in targets]
+    request.max_velocity = [lim.v_max for lim in limits]
+    request.max_acceleration = [lim.a_max for lim in limits]
+    request.max_jerk = [lim.j_max for lim in limits]
+    request.min_velocity = [-lim.v_max if lim.v_min is None else lim.v_min for lim in limits]
+    request.min_acceleration = [-lim.a_max if lim.a_min is None else lim.a_min for lim in limits]
+    if straight:
+        request.synchronization = Synchronization.Phase
+    if generator.calculate(request, trajectory) not in (Result.Working, Result.Finished):
+        return None
+    return trajectory.duration
