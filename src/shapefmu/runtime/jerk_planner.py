@@ -147,14 +147,20 @@ def _within(phases, limits, target, relative=1e-9):
 
 def _cancelled(state, target, lim, T, axis_modes, rigid, bounds, ringing, doublets=True):
     """Phases of one axis lasting T that meet every bound of its modes, or None: ``rigid`` with
-    doublets, or without (a shaped move re-timed). Starts with the modes' design equations and
-    adds the worst frequency of a band that still exceeds its bound (up to four times)."""
+    doublets, or without (a shaped move re-timed). Starts with the modes' design equations; a
+    solution past a limit has that point pinned to the limit, one that still exceeds a band's
+    bound gets the worst frequency added, and the durations are solved again (eight times at most)."""
     frequencies = [equation for m in axis_modes for equation in m.design_equations()]
-    for _ in range(5):
-        solved = vib.cancel(state, target, lim, T, axis_modes, rigid, ringing, frequencies, doublets)
+    pins = []
+    for _ in range(8):
+        solved = vib.cancel(state, target, lim, T, axis_modes, rigid, ringing, frequencies, doublets, pins)
         if solved is None:
             return None
         phases = Phases(state[0], state[1], state[2], *solved)
+        past = vib.violation(phases, lim)
+        if past is not None:
+            pins.append(past)
+            continue
         if not _within(phases, lim, target):
             return None
         worst = None

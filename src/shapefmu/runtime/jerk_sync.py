@@ -72,16 +72,21 @@ def profiles_lasting(problems, blocks, T, owner=None):
     return out
 
 
+def candidate_durations(blocks):
+    """[(T, owner axis)] in increasing order: the durations the synchronised move may take, each
+    the t_min or a blocked interval's right end of its owner and blocked for no axis (the paper,
+    Sec. IV-C). The first is the synchronised duration."""
+    floor = max(b.t_min for b in blocks)
+    candidates = sorted((t, axis) for axis, b in enumerate(blocks)
+                        for t in [b.t_min] + [right for _, right, _ in b.intervals])
+    return [(T, owner) for T, owner in candidates if T >= floor and not any(b.blocked(T) for b in blocks)]
+
+
 def synchronise(states, targets, limits):
     """(T, [AxisMove]) of the time-synchronised move of every axis from ``states`` (p, v, a) to
     ``targets`` (p, v, a) within ``limits`` (``Limits`` per axis)."""
     problems, blocks = rigid_blocks(states, targets, limits)
-    candidates = sorted((t, axis) for axis, b in enumerate(blocks)
-                        for t in [b.t_min] + [right for _, right, _ in b.intervals])
-    floor = max(b.t_min for b in blocks)
-    for T, owner in candidates:
-        if T < floor:
-            continue
+    for T, owner in candidate_durations(blocks):
         phases = profiles_lasting(problems, blocks, T, owner)
         if phases is not None:
             return T, [AxisMove(p, axis == owner) for axis, p in enumerate(phases)]

@@ -225,17 +225,24 @@ def _equations(durations, jerks, start, target, T, frequencies, scales, held, ri
         columns[k][2] = (dv + da * R + dj * R * R / 2.0) / scales[2]
         columns[k][3] = 1.0 / scales[3]
     for m, kind, level in held:
+        # "a", "v": the acceleration or velocity where phase m starts; "turn": the velocity where
+        # the acceleration passes zero inside phase m, v_m - a_m^2 / (2 j_m).
         if kind == "a":
             F.append((phases.a[m] - level) / scales[0])
-        else:
+        elif kind == "v":
             F.append((phases.v[m] - level) / scales[1])
+        else:
+            F.append((phases.v[m] - phases.a[m] ** 2 / (2.0 * jerks[m]) - level) / scales[1])
         for k in range(n):
             if k >= m:
                 columns[k].append(0.0)
             elif kind == "a":
                 columns[k].append(jerks[k] / scales[0])
             else:
-                columns[k].append((phases.a[k + 1] + jerks[k] * (ends[m] - ends[k + 1])) / scales[1])
+                dv = phases.a[k + 1] + jerks[k] * (ends[m] - ends[k + 1])
+                if kind == "turn":
+                    dv -= phases.a[m] / jerks[m] * jerks[k]
+                columns[k].append(dv / scales[1])
     for omega, zeta, order in frequencies:
         s = complex(-zeta * omega, omega * math.sqrt(1.0 - zeta * zeta))
         ds = complex(-zeta, math.sqrt(1.0 - zeta * zeta))  # d s / d omega
@@ -266,11 +273,13 @@ def _equations(durations, jerks, start, target, T, frequencies, scales, held, ri
     return F, columns
 
 
-def cancel(start, target, limits, T, modes, rigid, ringing=None, frequencies=None, doublets=True, iterations=40):
+def cancel(start, target, limits, T, modes, rigid, ringing=None, frequencies=None, doublets=True, pins=(),
+           iterations=40):
     """Durations and jerks of ``rigid``'s phases plus doublets that end in ``target`` at T with
     S = 0 at every design frequency of ``modes`` (module docstring), or None if Gauss-Newton
     fails. ``frequencies`` [(omega, zeta, order)] replaces the modes' design equations; without
-    ``doublets`` the phases of ``rigid`` (a shaped move) are re-timed as they are."""
+    ``doublets`` the phases of ``rigid`` (a shaped move) are re-timed as they are. ``pins``
+    [(phase, kind, level)] hold more points on a limit (``violation``)."""
     if frequencies is None:
         frequencies = [equation for mode in modes for equation in mode.design_equations()]
     j_max = limits.j_max
@@ -282,7 +291,7 @@ def cancel(start, target, limits, T, modes, rigid, ringing=None, frequencies=Non
         durations, jerks = _with_doublets(padded(rigid, T), len(frequencies), j_max, tau)
     else:
         durations, jerks = list(rigid.durations), list(rigid.jerks)
-    held = _held_limits(durations, jerks, start, limits)
+    held = _held_limits(durations, jerks, start, limits) + list(pins)
     v_scale = max(limits.v_max, -limits.v_min)
     a_scale = max(limits.a_max, -limits.a_min)
     scales = (a_scale, v_scale, v_scale * T, T, max(S_rigid, j_max * 1e-12))
@@ -318,6 +327,28 @@ def cancel(start, target, limits, T, modes, rigid, ringing=None, frequencies=Non
         else:
             break
     return (x, jerks) if norm < 1e-11 else None
+
+
+def violation(phases, limits):
+    """(phase, kind, level) of the point of ``phases`` furthest past a limit (relative to the
+    limit), as a pin for ``cancel``; None if every limit holds to 1e-9."""
+    worst, found = 1e-9, None
+    for k in range(1, len(phases.durations)):
+        for value, high, low, kind in ((phases.a[k], limits.a_max, limits.a_min, "a"),
+                                       (phases.v[k], limits.v_max, limits.v_min, "v")):
+            for level in (high, low):
+                excess = (value - level) / level
+                if excess > worst:
+                    worst, found = excess, (k, kind, level)
+    for k, j in enumerate(phases.jerks):
+        a0, a1 = phases.a[k], phases.a[k + 1]
+        if j != 0.0 and a0 * a1 < 0.0:
+            turn = phases.v[k] - a0 * a0 / (2.0 * j)
+            for level in (limits.v_max, limits.v_min):
+                excess = (turn - level) / level
+                if excess > worst:
+                    worst, found = excess, (k, "turn", level)
+    return found
 
 
 def _least_norm_step(columns, F):

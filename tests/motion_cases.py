@@ -1,0 +1,61 @@
+"""Random jerk-limited problems for the motion tests, and Ruckig (the peer) on the same problems.
+
+A problem is per axis (state, target, Limits): limits drawn with asymmetric velocity and
+acceleration ranges; the state and the target drawn inside them and safe (the acceleration can be
+brought to zero without leaving the velocity range, so that neither we nor Ruckig has to brake
+first); a third of the targets at rest.
+"""
+
+import random
+
+import pytest
+
+from shapefmu.runtime.jerk_profiles import Limits
+
+ruckig = pytest.importorskip("ruckig")
+
+
+def _safe(rng, lim):
+    while True:
+        v = rng.uniform(lim.v_min, lim.v_max)
+        a = rng.uniform(lim.a_min, lim.a_max)
+        reach = a * abs(a) / (2.0 * lim.j_max)
+        if lim.v_min <= v + reach <= lim.v_max and lim.v_min <= v - reach <= lim.v_max:
+            return v, a
+
+
+def random_problem(rng: random.Random, axes=None, rest_target=None):
+    """([state], [target], [Limits]) of 1-3 axes (or ``axes``)."""
+    count = axes or rng.randint(1, 3)
+    states, targets, limits = [], [], []
+    for _ in range(count):
+        lim = Limits(rng.uniform(0.5, 2.0), rng.uniform(0.5, 3.0), rng.uniform(1.0, 10.0),
+                     -rng.uniform(0.5, 2.0), -rng.uniform(0.5, 3.0))
+        v0, a0 = _safe(rng, lim)
+        vf, af = _safe(rng, lim)
+        if rest_target or (rest_target is None and rng.random() < 1 / 3):
+            vf = af = 0.0
+        states.append((rng.uniform(-1.0, 1.0), v0, a0))
+        targets.append((rng.uniform(-2.0, 2.0), vf, af))
+        limits.append(lim)
+    return states, targets, limits
+
+
+def ruckig_trajectory(states, targets, limits):
+    """Ruckig's trajectory for the problem, or None where Ruckig reports an error."""
+    n = len(states)
+    generator, request, trajectory = ruckig.Ruckig(n), ruckig.InputParameter(n), ruckig.Trajectory(n)
+    request.current_position = [s[0] for s in states]
+    request.current_velocity = [s[1] for s in states]
+    request.current_acceleration = [s[2] for s in states]
+    request.target_position = [t[0] for t in targets]
+    request.target_velocity = [t[1] for t in targets]
+    request.target_acceleration = [t[2] for t in targets]
+    request.max_velocity = [lim.v_max for lim in limits]
+    request.min_velocity = [lim.v_min for lim in limits]
+    request.max_acceleration = [lim.a_max for lim in limits]
+    request.min_acceleration = [lim.a_min for lim in limits]
+    request.max_jerk = [lim.j_max for lim in limits]
+    if generator.calculate(request, trajectory) not in (ruckig.Result.Working, ruckig.Result.Finished):
+        return None
+    return trajectory
