@@ -44,7 +44,6 @@ import cmath
 import math
 
 from .jerk_profiles import Phases
-from .least_squares import solve_least_squares
 
 # Frequencies per unit of (band width in rad/s) x (move time) at which the band is checked: the
 # phase of S turns by about that product across the band, so 20 points per radian resolve it.
@@ -71,11 +70,11 @@ class Mode:
 
     def design_equations(self):
         """[(omega, zeta, order)]: S = 0 (order 0) at the centre for a single frequency; for a
-        band, at two frequencies 0.6 delta either side of it (as the extra-insensitive shaper
-        places its zeros, leaving a hump in the middle that the planner checks)."""
+        band, at the centre and 0.75 delta either side of it (zeros spread over the band, as the
+        extra-insensitive shapers place theirs; the planner checks the humps between them)."""
         if self.delta == 0.0:
             return [(self.omega, self.zeta, 0)]
-        return [(self.omega * (1.0 + x * self.delta), self.zeta, 0) for x in (-0.6, 0.6)]
+        return [(self.omega * (1.0 + x * self.delta), self.zeta, 0) for x in (-0.75, 0.0, 0.75)]
 
 
 def jerk_sum(durations, jerks, T, omega, zeta, ringing=None):
@@ -288,7 +287,10 @@ def cancel(start, target, limits, T, modes, rigid, ringing=None, frequencies=Non
     omega_low = min(w for w, _, _ in frequencies)
     tau = math.sqrt(S_rigid / (j_max * omega_low * omega_low) / len(frequencies)) if S_rigid > 0.0 else 0.0
     if doublets:
-        durations, jerks = _with_doublets(padded(rigid, T), len(frequencies), j_max, tau)
+        # One doublet per frequency cancels a single one; zeros spread over a band need more
+        # freedom than they have equations (two doublets each), or Gauss-Newton finds no root.
+        count = len(frequencies) * (1 if all(mode.delta == 0.0 for mode in modes) else 2)
+        durations, jerks = _with_doublets(padded(rigid, T), count, j_max, tau)
     else:
         durations, jerks = list(rigid.durations), list(rigid.jerks)
     held = _held_limits(durations, jerks, start, limits) + list(pins)
@@ -352,14 +354,26 @@ def violation(phases, limits):
 
 
 def _least_norm_step(columns, F):
-    """dx of least norm with J dx = -F (J given by its columns, one per duration; m <= n)."""
+    """dx of least norm with J dx = -F (J given by its columns, one per duration; m <= n):
+    dx = J^T y with (J J^T + mu I) y = -F, mu = 1e-13 trace (a Levenberg term that keeps the
+    system positive definite), solved by Cholesky."""
     n, m = len(columns), len(F)
-    # J J^T y = -F, dx = J^T y; a tiny Levenberg term keeps J J^T invertible.
-    JJt = [[math.fsum(columns[k][i] * columns[k][j] for k in range(n)) for j in range(m)] for i in range(m)]
-    trace = max(sum(JJt[i][i] for i in range(m)), 1e-300)
+    rows = list(zip(*columns))
+    M = [[sum(a * b for a, b in zip(rows[i], rows[j])) for j in range(i + 1)] for i in range(m)]
+    mu = 1e-13 * max(sum(M[i][i] for i in range(m)), 1e-300)
+    L = [[0.0] * m for _ in range(m)]
     for i in range(m):
-        JJt[i][i] += 1e-13 * trace
-    y = solve_least_squares(JJt, [-f for f in F])
-    if y is None:
-        return None
-    return [math.fsum(columns[k][i] * y[i] for i in range(m)) for k in range(n)]
+        for j in range(i + 1):
+            value = M[i][j] + (mu if i == j else 0.0) - sum(L[i][k] * L[j][k] for k in range(j))
+            if i == j:
+                if value <= 0.0:
+                    return None
+                L[i][i] = math.sqrt(value)
+            else:
+                L[i][j] = value / L[j][j]
+    y = [0.0] * m
+    for i in range(m):
+        y[i] = (-F[i] - sum(L[i][k] * y[k] for k in range(i))) / L[i][i]
+    for i in range(m - 1, -1, -1):
+        y[i] = (y[i] - sum(L[k][i] * y[k] for k in range(i + 1, m))) / L[i][i]
+    return [sum(c * yi for c, yi in zip(column, y)) for column in columns]
