@@ -150,7 +150,7 @@ def _cancelled(state, target, lim, T, axis_modes, rigid, bounds, ringing, double
     doublets, or without (a shaped move re-timed). Starts with the modes' design equations; a
     solution past a limit has that point pinned to the limit, one that still exceeds a band's
     bound gets the worst frequency added, and the durations are solved again (eight times at most)."""
-    frequencies = [equation for m in axis_modes for equation in m.design_equations()]
+    frequencies = [(omega, m.zeta) for m in axis_modes for omega in m.design_frequencies()]
     pins = []
     for _ in range(8):
         solved = vib.cancel(state, target, lim, T, axis_modes, rigid, ringing, frequencies, doublets, pins)
@@ -171,7 +171,7 @@ def _cancelled(state, target, lim, T, axis_modes, rigid, bounds, ringing, double
                     worst = (excess, omega, mode.zeta)
         if worst is None:
             return phases
-        frequencies.append((worst[1], worst[2], 0))
+        frequencies.append(worst[1:])
     return None
 
 

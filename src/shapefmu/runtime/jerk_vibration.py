@@ -40,7 +40,6 @@ from the rigid phases. The planner tries increasing T from the rigid duration an
 move that passes the exact checks (limits, end state, the bound over the band).
 """
 
-import cmath
 import math
 
 from .jerk_profiles import Phases
@@ -68,13 +67,19 @@ class Mode:
         low = self.omega * (1.0 - self.delta)
         return [low + width * k / (count - 1) for k in range(count)]
 
-    def design_equations(self):
-        """[(omega, zeta, order)]: S = 0 (order 0) at the centre for a single frequency; for a
-        band, at the centre and 0.75 delta either side of it (zeros spread over the band, as the
+    def design_frequencies(self):
+        """The frequencies at which ``cancel`` makes S = 0: the mode's for a single frequency;
+        for a band, its centre and 0.75 delta either side (zeros spread over the band, as the
         extra-insensitive shapers place theirs; the planner checks the humps between them)."""
         if self.delta == 0.0:
-            return [(self.omega, self.zeta, 0)]
-        return [(self.omega * (1.0 + x * self.delta), self.zeta, 0) for x in (-0.75, 0.0, 0.75)]
+            return [self.omega]
+        return [self.omega * (1.0 + x * self.delta) for x in (-0.75, 0.0, 0.75)]
+
+
+def _exp(z):
+    """e^z as exp(Re z) (cos Im z, sin Im z), the formula the C twin repeats."""
+    scale = math.exp(z.real)
+    return complex(scale * math.cos(z.imag), scale * math.sin(z.imag))
 
 
 def jerk_sum(durations, jerks, T, omega, zeta, ringing=None):
@@ -85,15 +90,15 @@ def jerk_sum(durations, jerks, T, omega, zeta, ringing=None):
     turns with the mode, e^{s T}, and adds to the steps of this move."""
     sigma = zeta * omega
     s = complex(-sigma, omega * math.sqrt(1.0 - zeta * zeta))
-    total = ringing(omega, zeta) * cmath.exp(s * T) if ringing is not None else 0j
+    total = ringing(omega, zeta) * _exp(s * T) if ringing is not None else 0j
     previous, t = 0.0, 0.0
     for d, j in zip(durations, jerks):
         if j != previous:
-            total += (j - previous) * cmath.exp(s * (T - t))
+            total += (j - previous) * _exp(s * (T - t))
             previous = j
         t += d
     if previous != 0.0:
-        total -= previous * cmath.exp(s * (T - t))
+        total -= previous * _exp(s * (T - t))
     return total
 
 
@@ -242,30 +247,23 @@ def _equations(durations, jerks, start, target, T, frequencies, scales, held, ri
                 if kind == "turn":
                     dv -= phases.a[m] / jerks[m] * jerks[k]
                 columns[k].append(dv / scales[1])
-    for omega, zeta, order in frequencies:
+    for omega, zeta in frequencies:
         s = complex(-zeta * omega, omega * math.sqrt(1.0 - zeta * zeta))
-        ds = complex(-zeta, math.sqrt(1.0 - zeta * zeta))  # d s / d omega
-        # Steps dj_i at the starts of the phases and at the end, at the instants t_i.
-        steps, instants, previous = [], [], 0.0
+        # Steps dj_i at the starts of the phases and at the end; moving an instant t_i by dt
+        # changes its term dj_i e^{s (T - t_i)} by -s times it.
+        steps, previous = [], 0.0
         for k in range(n + 1):
             level = jerks[k] if k < n else 0.0
-            steps.append((level - previous) * cmath.exp(s * (T - ends[k])))
-            instants.append(T - ends[k])
+            steps.append((level - previous) * _exp(s * (T - ends[k])))
             previous = level
-        # The order-th derivative in omega, per unit of T^order: sum dj_i (r_i ds / T)^order e^{s r_i},
-        # r_i = T - t_i; moving t_i by dt changes each term by -(order ds / T (r_i ds / T)^(order-1)
-        # + s (r_i ds / T)^order) e^{s r_i} dt.
-        powers = [(r * ds / T) ** order for r in instants]
-        value = sum(step * w for step, w in zip(steps, powers))
-        if order == 0 and ringing is not None:
-            value += ringing(omega, zeta) * cmath.exp(s * T)
-        shifted = [-(order * ds / T * ((r * ds / T) ** (order - 1) if order else 0.0) + s * w) * step
-                   for step, w, r in zip(steps, powers, instants)]
+        value = sum(steps)
+        if ringing is not None:
+            value += ringing(omega, zeta) * _exp(s * T)
         F += [value.real / scales[4], value.imag / scales[4]]
         tail = 0j
         tails = [0j] * n
         for k in range(n - 1, -1, -1):
-            tail += shifted[k + 1]
+            tail += -s * steps[k + 1]
             tails[k] = tail / scales[4]
         for k in range(n):
             columns[k] += [tails[k].real, tails[k].imag]
@@ -276,15 +274,14 @@ def cancel(start, target, limits, T, modes, rigid, ringing=None, frequencies=Non
            iterations=40):
     """Durations and jerks of ``rigid``'s phases plus doublets that end in ``target`` at T with
     S = 0 at every design frequency of ``modes`` (module docstring), or None if Gauss-Newton
-    fails. ``frequencies`` [(omega, zeta, order)] replaces the modes' design equations; without
+    fails. ``frequencies`` [(omega, zeta)] replaces the modes' design frequencies; without
     ``doublets`` the phases of ``rigid`` (a shaped move) are re-timed as they are. ``pins``
     [(phase, kind, level)] hold more points on a limit (``violation``)."""
     if frequencies is None:
-        frequencies = [equation for mode in modes for equation in mode.design_equations()]
+        frequencies = [(omega, mode.zeta) for mode in modes for omega in mode.design_frequencies()]
     j_max = limits.j_max
-    S_rigid = max(abs(jerk_sum(rigid.durations, rigid.jerks, rigid.duration, w, z, ringing))
-                  for w, z, _ in frequencies)
-    omega_low = min(w for w, _, _ in frequencies)
+    S_rigid = max(abs(jerk_sum(rigid.durations, rigid.jerks, rigid.duration, w, z, ringing)) for w, z in frequencies)
+    omega_low = min(w for w, _ in frequencies)
     tau = math.sqrt(S_rigid / (j_max * omega_low * omega_low) / len(frequencies)) if S_rigid > 0.0 else 0.0
     if doublets:
         # One doublet per frequency cancels a single one; zeros spread over a band need more
@@ -299,7 +296,7 @@ def cancel(start, target, limits, T, modes, rigid, ringing=None, frequencies=Non
     scales = (a_scale, v_scale, v_scale * T, T, max(S_rigid, j_max * 1e-12))
     x = list(durations)
     F, columns = _equations(x, jerks, start, target, T, frequencies, scales, held, ringing)
-    norm = math.sqrt(math.fsum(f * f for f in F))
+    norm = math.sqrt(sum(f * f for f in F))
     for _ in range(iterations):
         if norm < 1e-14:
             break
@@ -321,7 +318,7 @@ def cancel(start, target, limits, T, modes, rigid, ringing=None, frequencies=Non
                 factor *= 0.5
                 continue
             F_trial, columns_trial = _equations(trial, jerks, start, target, T, frequencies, scales, held, ringing)
-            norm_trial = math.sqrt(math.fsum(f * f for f in F_trial))
+            norm_trial = math.sqrt(sum(f * f for f in F_trial))
             if norm_trial < norm:
                 x, F, columns, norm = trial, F_trial, columns_trial, norm_trial
                 break
