@@ -1,0 +1,64 @@
+/* The online jerk-limited multi-axis planner with vibration bounds in C (jerk_planner.c): the twin of
+ * runtime/jerk_profiles.py, jerk_sync.py, jerk_vibration.py and jerk_planner.py, operation for
+ * operation, so that a native FMU plans what the Python kernel plans (to rounding).
+ *
+ * What differs from the Python kernel: the ceiling's shapers (the shortest catalog shaper of every
+ * axis, which depends only on the axis's modes, band and vtol) are designed once by the caller and
+ * passed in, as a native FMU does at build time; the ringing a re-planned move inherits is given as
+ * the jerk history (phases) since the first start rather than as a function. */
+#ifndef JERK_PLANNER_H
+#define JERK_PLANNER_H
+
+#define JP_MAX_AXES 8
+#define JP_MAX_MODES 4       /* per axis */
+#define JP_MAX_PHASES 256    /* per axis and move */
+#define JP_MAX_IMPULSES 64   /* per ceiling shaper */
+
+typedef struct {
+    double v_max, v_min, a_max, a_min, j_max;  /* v_min, a_min < 0 */
+} JpLimits;
+
+typedef struct {
+    double omega, zeta, delta, vtol;  /* rad/s; band +- delta omega; bound vtol of the rigid residual */
+} JpMode;
+
+typedef struct {
+    int count;  /* 0: no shaper (the axis has no modes) */
+    double times[JP_MAX_IMPULSES], amplitudes[JP_MAX_IMPULSES];
+} JpShaper;
+
+typedef struct {
+    int count;
+    double start[3];  /* p, v, a */
+    double durations[JP_MAX_PHASES], jerks[JP_MAX_PHASES];
+} JpAxisPhases;
+
+typedef struct {
+    int axes;
+    double states[JP_MAX_AXES][3], targets[JP_MAX_AXES][3];
+    JpLimits limits[JP_MAX_AXES];
+    int mode_count[JP_MAX_AXES];
+    JpMode modes[JP_MAX_AXES][JP_MAX_MODES];
+    JpShaper ceiling[JP_MAX_AXES];
+    int straight;              /* along the straight line between the positions */
+    double ts;                 /* > 0: the duration a whole number of periods ts */
+    const JpAxisPhases *history;  /* NULL, or per axis the jerk since the first start (a re-plan) */
+} JpRequest;
+
+typedef struct {
+    double duration, rigid_duration, ceiling_duration;  /* ceiling: inf when it leaves the limits */
+    int method;  /* 0 rigid, 1 cancel, 2 shaped */
+    JpAxisPhases phases[JP_MAX_AXES];
+    double references[JP_MAX_AXES][JP_MAX_MODES], residuals[JP_MAX_AXES][JP_MAX_MODES];
+    char message[256];  /* why, when jp_plan returns nonzero */
+} JpResult;
+
+/* 0 and *result filled; nonzero and result->message on an unreachable target, a start that must
+ * break a limit, or a move no planner finds within the limits and bounds. */
+int jp_plan(const JpRequest *request, JpResult *result);
+
+/* The synchronised rigid duration alone (the candidate of the blocks), for the comparison with
+ * Ruckig; 0 and *duration, or nonzero and message. */
+int jp_rigid_duration(const JpRequest *request, double *duration, char *message, int size);
+
+#endif

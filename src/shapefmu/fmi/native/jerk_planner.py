@@ -1,0 +1,162 @@
+"""The C twin of the motion planner (``c/jerk_planner.c``) compiled as a shared library and called
+through ctypes: what the tests compare with the Python kernel (``runtime.jerk_planner``) and what the
+benchmark times beside Ruckig. The FMU that will carry it waits for the FMU kinds of issue 33.
+
+``NativePlanner().plan(states, targets, limits, modes, ...)`` takes the runtime kernel's arguments
+(``Limits``, ``jerk_vibration.Mode``) and returns a ``runtime.jerk_planner.PlannedMove``; the ceiling's
+shapers, which depend only on the modes, are designed here in Python first
+(``runtime.jerk_planner.shortest_shaper``), as a native FMU designs them at build time.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import functools
+import math
+import tempfile
+from pathlib import Path
+
+from shapefmu.fmi.compiler import run_compiler
+from shapefmu.runtime.jerk_planner import PlannedMove, shortest_shaper
+from shapefmu.runtime.jerk_profiles import Phases
+
+SOURCE = Path(__file__).parent / "c" / "jerk_planner.c"
+MAX_AXES, MAX_MODES, MAX_PHASES, MAX_IMPULSES = 8, 4, 256, 64
+METHODS = ("rigid", "cancel", "shaped")
+
+
+class _Limits(ctypes.Structure):
+    _fields_ = [(name, ctypes.c_double) for name in ("v_max", "v_min", "a_max", "a_min", "j_max")]
+
+
+class _Mode(ctypes.Structure):
+    _fields_ = [(name, ctypes.c_double) for name in ("omega", "zeta", "delta", "vtol")]
+
+
+class _Shaper(ctypes.Structure):
+    _fields_ = [("count", ctypes.c_int), ("times", ctypes.c_double * MAX_IMPULSES),
+                ("amplitudes", ctypes.c_double * MAX_IMPULSES)]
+
+
+class _AxisPhases(ctypes.Structure):
+    _fields_ = [("count", ctypes.c_int), ("start", ctypes.c_double * 3), ("durations", ctypes.c_double * MAX_PHASES),
+                ("jerks", ctypes.c_double * MAX_PHASES)]
+
+
+class _Request(ctypes.Structure):
+    _fields_ = [("axes", ctypes.c_int), ("states", (ctypes.c_double * 3) * MAX_AXES),
+                ("targets", (ctypes.c_double * 3) * MAX_AXES), ("limits", _Limits * MAX_AXES),
+                ("mode_count", ctypes.c_int * MAX_AXES), ("modes", (_Mode * MAX_MODES) * MAX_AXES),
+                ("ceiling", _Shaper * MAX_AXES), ("straight", ctypes.c_int), ("ts", ctypes.c_double),
+                ("history", ctypes.POINTER(_AxisPhases))]
+
+
+class _Result(ctypes.Structure):
+    _fields_ = [("duration", ctypes.c_double), ("rigid_duration", ctypes.c_double),
+                ("ceiling_duration", ctypes.c_double), ("method", ctypes.c_int), ("phases", _AxisPhases * MAX_AXES),
+                ("references", (ctypes.c_double * MAX_MODES) * MAX_AXES),
+                ("residuals", (ctypes.c_double * MAX_MODES) * MAX_AXES), ("message", ctypes.c_char * 256)]
+
+
+@functools.lru_cache(maxsize=1)
+def library() -> ctypes.CDLL:
+    """The compiled twin (gcc -O2), built once per process in a temporary folder."""
+    folder = Path(tempfile.mkdtemp(prefix="shapefmu-jerk-planner-"))
+    target = folder / "libjerk_planner.so"
+    done = run_compiler(["gcc", "-O2", "-std=c99", "-Wall", "-Wextra", "-Werror", "-shared", "-fPIC", "-o", str(target),
+                         str(SOURCE), "-lm"])
+    if done.returncode != 0:
+        raise RuntimeError(f"compiling {SOURCE.name} failed: {done.stderr}")
+    lib = ctypes.CDLL(str(target))
+    lib.jp_plan.argtypes = [ctypes.POINTER(_Request), ctypes.POINTER(_Result)]
+    lib.jp_plan.restype = ctypes.c_int
+    lib.jp_rigid_duration.argtypes = [ctypes.POINTER(_Request), ctypes.POINTER(ctypes.c_double), ctypes.c_char_p,
+                                      ctypes.c_int]
+    lib.jp_rigid_duration.restype = ctypes.c_int
+    return lib
+
+
+def _request(states, targets, limits, modes=None, shapers=None, straight=False, ts=None, history=None) -> _Request:
+    count = len(states)
+    if not 1 <= count <= MAX_AXES:
+        raise ValueError(f"the number of axes must be in [1, {MAX_AXES}], got {count}")
+    request = _Request()
+    request.axes = count
+    for i, (state, target, lim) in enumerate(zip(states, targets, limits)):
+        request.states[i][:] = list(map(float, state))
+        request.targets[i][:] = list(map(float, target))
+        request.limits[i] = _Limits(lim.v_max, lim.v_min, lim.a_max, lim.a_min, lim.j_max)
+        axis_modes = modes[i] if modes else []
+        if len(axis_modes) > MAX_MODES:
+            raise ValueError(f"axis {i} has {len(axis_modes)} modes, more than the C twin's {MAX_MODES}")
+        request.mode_count[i] = len(axis_modes)
+        for q, mode in enumerate(axis_modes):
+            request.modes[i][q] = _Mode(mode.omega, mode.zeta, mode.delta, mode.vtol)
+        shaper = shapers[i] if shapers else None
+        if shaper is not None:
+            _, times, amplitudes = shaper
+            if len(times) > MAX_IMPULSES:
+                raise ValueError(f"the ceiling shaper of axis {i} has {len(times)} impulses, more than {MAX_IMPULSES}")
+            request.ceiling[i].count = len(times)
+            request.ceiling[i].times[: len(times)] = times
+            request.ceiling[i].amplitudes[: len(times)] = amplitudes
+    request.straight = int(bool(straight))
+    request.ts = float(ts) if ts is not None else 0.0
+    if history is not None:
+        axes = (_AxisPhases * count)()
+        for i, phases in enumerate(history):
+            if len(phases.durations) > MAX_PHASES:
+                raise ValueError(f"the history of axis {i} has more than {MAX_PHASES} phases")
+            axes[i].count = len(phases.durations)
+            axes[i].durations[: len(phases.durations)] = phases.durations
+            axes[i].jerks[: len(phases.jerks)] = phases.jerks
+        request.history = ctypes.cast(axes, ctypes.POINTER(_AxisPhases))
+        request._history_keepalive = axes
+    return request
+
+
+def rigid_duration(states, targets, limits) -> float:
+    """The synchronised rigid duration (Ruckig's) computed by the twin."""
+    request = _request(states, targets, limits)
+    duration, message = ctypes.c_double(), ctypes.create_string_buffer(256)
+    if library().jp_rigid_duration(ctypes.byref(request), ctypes.byref(duration), message, 256) != 0:
+        raise ValueError(message.value.decode())
+    return duration.value
+
+
+def ceiling_shapers(states, targets, limits, modes):
+    """Per axis the shortest catalog shaper of its modes (None without modes), designed with the
+    rigid duration as ``runtime.jerk_planner.shaped_move`` does; None if an axis has none."""
+    T0 = rigid_duration(states, targets, limits)
+    shapers = []
+    for axis_modes in modes:
+        if not axis_modes:
+            shapers.append(None)
+            continue
+        found = shortest_shaper(axis_modes, T0)
+        if found is None:
+            return None
+        shapers.append(found)
+    return shapers
+
+
+def plan(states, targets, limits, modes, straight=False, ts=None, history=None, shapers=None) -> PlannedMove:
+    """``runtime.jerk_planner.plan_move`` in C. ``history``: per axis the ``Phases`` of the jerk
+    since the first start (a re-plan); ``shapers`` the ceiling's (``ceiling_shapers`` by default)."""
+    if shapers is None and any(modes):
+        shapers = ceiling_shapers(states, targets, limits, modes)
+    request = _request(states, targets, limits, modes, shapers, straight, ts, history)
+    result = _Result()
+    if library().jp_plan(ctypes.byref(request), ctypes.byref(result)) != 0:
+        raise ValueError(result.message.decode())
+    phases = []
+    for i in range(len(states)):
+        axis = result.phases[i]
+        phases.append(Phases(*axis.start, list(axis.durations[: axis.count]), list(axis.jerks[: axis.count])))
+    counts = [len(m) for m in modes] if modes else [0] * len(states)
+    references = [list(result.references[i][:c]) for i, c in enumerate(counts)]
+    residuals = [list(result.residuals[i][:c]) for i, c in enumerate(counts)]
+    ceiling = shapers if shapers is not None else [None] * len(states)
+    ceiling_duration = result.ceiling_duration if math.isfinite(result.ceiling_duration) else math.inf
+    return PlannedMove(result.duration, phases, METHODS[result.method], result.rigid_duration, references, residuals,
+                       ceiling, ceiling_duration)
