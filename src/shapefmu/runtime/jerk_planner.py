@@ -21,7 +21,7 @@ import cmath
 import math
 
 from . import jerk_vibration as vib
-from .jerk_profiles import Phases
+from .jerk_profiles import Limits, Phases
 from .jerk_sync import check_start_within, profiles_lasting, rigid_blocks, straight_line, synchronise
 from .shaper_designs import design_impulses
 
@@ -106,26 +106,51 @@ def shaped_move(states, targets, limits, modes, straight=False, iterations=40):
         if found is None:
             return None
         shapers.append(found)
-    corrected = [list(t) for t in targets]
-    for _ in range(iterations):
-        _, rigid = _rigid(states, [tuple(t) for t in corrected], limits, straight)
-        shaped = [p if shaper is None else vib.convolve_jerk(p, shaper[1], shaper[2])
-                  for p, shaper in zip(rigid, shapers)]
-        error = 0.0
-        for axis, (phases, target) in enumerate(zip(shaped, targets)):
-            p, v, _ = phases.end()
-            corrected[axis][0] += target[0] - p
-            corrected[axis][1] += target[1] - v
-            error = max(error, abs(target[0] - p) / max(abs(target[0] - states[axis][0]), 1e-300),
-                        abs(target[1] - v) / max(limits[axis].v_max, -limits[axis].v_min))
-        if error <= 1e-13:
-            break
-    duration = max(p.duration for p in shaped)
-    shaped = [vib.padded(p, duration) for p in shaped]
-    for phases, lim, target in zip(shaped, limits, targets):
-        if not _within(phases, lim, target):
+    # From a moving start the shaper keeps part of the initial acceleration on for its length, and
+    # the shaped velocity can pass a limit the rigid move only touched: the rigid move is planned
+    # again within velocity limits narrowed by what the shaped one passed them by (three times).
+    planned = list(limits)
+    for _ in range(4):
+        shaped = _shaped_fixed_point(states, targets, planned, limits, shapers, straight, iterations)
+        if shaped is None:
             return None
-    return duration, shaped, shapers
+        duration = max(p.duration for p in shaped)
+        shaped = [vib.padded(p, duration) for p in shaped]
+        if all(_within(phases, lim, target) for phases, lim, target in zip(shaped, limits, targets)):
+            return duration, shaped, shapers
+        narrowed = []
+        for phases, lim, plan in zip(shaped, limits, planned):
+            v_low, v_high, _, _ = phases.extrema()
+            high = plan.v_max - max(v_high - lim.v_max, 0.0) * 1.001
+            low = plan.v_min + max(lim.v_min - v_low, 0.0) * 1.001
+            if high <= 0.0 or low >= 0.0:
+                return None
+            narrowed.append(Limits(high, plan.a_max, plan.j_max, low, plan.a_min))
+        planned = narrowed
+    return None
+
+
+def _shaped_fixed_point(states, targets, planned, limits, shapers, straight, iterations):
+    """The shaped phases of every axis, the rigid targets (planned within ``planned``) corrected
+    until the shaped axes end in ``targets``; None if the rigid move cannot be planned."""
+    corrected = [list(t) for t in targets]
+    try:
+        for _ in range(iterations):
+            _, rigid = _rigid(states, [tuple(t) for t in corrected], planned, straight)
+            shaped = [p if shaper is None else vib.convolve_jerk(p, shaper[1], shaper[2])
+                      for p, shaper in zip(rigid, shapers)]
+            error = 0.0
+            for axis, (phases, target) in enumerate(zip(shaped, targets)):
+                p, v, _ = phases.end()
+                corrected[axis][0] += target[0] - p
+                corrected[axis][1] += target[1] - v
+                error = max(error, abs(target[0] - p) / max(abs(target[0] - states[axis][0]), 1e-300),
+                            abs(target[1] - v) / max(limits[axis].v_max, -limits[axis].v_min))
+            if error <= 1e-13:
+                break
+    except ValueError:  # the narrowed limits leave the start or the target out of reach
+        return None
+    return shaped
 
 
 def _within(phases, limits, target, relative=1e-9):

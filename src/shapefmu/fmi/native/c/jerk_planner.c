@@ -1194,31 +1194,34 @@ typedef struct {
     int size;
 } Planner;
 
-static int plan_rigid(Planner *pl, double (*targets)[3], double *T, Ph *out) {
+static int plan_rigid(Planner *pl, double (*targets)[3], const JpLimits *limits, double *T, Ph *out) {
     Rigid rg;
     int status;
     if (pl->rq->straight)
-        status = straight_line(&rg, pl->rq->axes, pl->states, targets, pl->rq->limits, T, out, pl->scratch, pl->message, pl->size);
+        status = straight_line(&rg, pl->rq->axes, pl->states, targets, limits, T, out, pl->scratch, pl->message, pl->size);
     else
-        status = synchronise(&rg, pl->rq->axes, pl->states, targets, pl->rq->limits, T, out, pl->scratch);
+        status = synchronise(&rg, pl->rq->axes, pl->states, targets, limits, T, out, pl->scratch);
     if (status == -1)
         snprintf(pl->message, (size_t)pl->size, "unreachable target: no common duration found in which every axis "
                  "reaches its target within its limits");
     return status;
 }
 
-/* shaped_move: 1 and (duration, shaped[]), 0 for None, <0 error */
-static int shaped_move(Planner *pl, double *duration, Ph *shaped) {
+/* _shaped_fixed_point: 1 and shaped[], 0 for None */
+static int shaped_fixed_point(Planner *pl, const JpLimits *planned, Ph *shaped) {
     const JpRequest *rq = pl->rq;
     int axes = rq->axes;
-    for (int i = 0; i < axes; i++) if (rq->mode_count[i] > 0 && rq->ceiling[i].count == 0) return 0;
     double corrected[JP_MAX_AXES][3];
     memcpy(corrected, rq->targets, sizeof(corrected));
     static Ph rigid[JP_MAX_AXES];
+    char ignored[256];
     for (int it = 0; it < 40; it++) {
         double T;
-        int status = plan_rigid(pl, corrected, &T, rigid);
-        if (status != 0) return status;
+        char *message = pl->message;
+        pl->message = ignored;  /* a rigid move the narrowed limits cannot plan is a missing ceiling */
+        int status = plan_rigid(pl, corrected, planned, &T, rigid);
+        pl->message = message;
+        if (status != 0) return 0;
         double error = 0.0;
         for (int i = 0; i < axes; i++) {
             if (rq->ceiling[i].count > 0) { if (convolve_jerk(&rigid[i], &rq->ceiling[i], &shaped[i]) != 0) return 0; }
@@ -1233,16 +1236,40 @@ static int shaped_move(Planner *pl, double *duration, Ph *shaped) {
         }
         if (error <= 1e-13) break;
     }
-    double T = -INFINITY;
-    for (int i = 0; i < axes; i++) T = max2(T, ph_duration(&shaped[i]));
-    for (int i = 0; i < axes; i++) {
-        Ph pad;
-        if (padded(&shaped[i], T, &pad) != 0) return 0;
-        shaped[i] = pad;
-        if (!within(&shaped[i], &rq->limits[i], rq->targets[i])) return 0;
-    }
-    *duration = T;
     return 1;
+}
+
+/* shaped_move: 1 and (duration, shaped[]), 0 for None */
+static int shaped_move(Planner *pl, double *duration, Ph *shaped) {
+    const JpRequest *rq = pl->rq;
+    int axes = rq->axes;
+    for (int i = 0; i < axes; i++) if (rq->mode_count[i] > 0 && rq->ceiling[i].count == 0) return 0;
+    JpLimits planned[JP_MAX_AXES];
+    memcpy(planned, rq->limits, sizeof(JpLimits) * (size_t)axes);
+    for (int round = 0; round < 4; round++) {
+        if (!shaped_fixed_point(pl, planned, shaped)) return 0;
+        double T = -INFINITY;
+        for (int i = 0; i < axes; i++) T = max2(T, ph_duration(&shaped[i]));
+        int all = 1;
+        for (int i = 0; i < axes; i++) {
+            Ph pad;
+            if (padded(&shaped[i], T, &pad) != 0) return 0;
+            shaped[i] = pad;
+            if (!within(&shaped[i], &rq->limits[i], rq->targets[i])) all = 0;
+        }
+        if (all) { *duration = T; return 1; }
+        for (int i = 0; i < axes; i++) {
+            double vl, vh, al, ah;
+            ph_extrema(&shaped[i], &vl, &vh, &al, &ah);
+            const JpLimits *lim = &rq->limits[i];
+            double high = planned[i].v_max - max2(vh - lim->v_max, 0.0) * 1.001;
+            double low = planned[i].v_min + max2(lim->v_min - vl, 0.0) * 1.001;
+            if (high <= 0.0 || low >= 0.0) return 0;
+            planned[i].v_max = high;
+            planned[i].v_min = low;
+        }
+    }
+    return 0;
 }
 
 /* _cancelled: 1 and *out */
@@ -1356,7 +1383,7 @@ static int plan(const JpRequest *rq, JpResult *result, Ph *scratch) {
     double T0;
     double targets[JP_MAX_AXES][3];
     memcpy(targets, rq->targets, sizeof(targets));
-    if (plan_rigid(&pl, targets, &T0, rigid) != 0) return -1;
+    if (plan_rigid(&pl, targets, rq->limits, &T0, rigid) != 0) return -1;
     if (rigid_blocks(&pl.rigid, axes, pl.states, targets, rq->limits, scratch) != 0) {
         snprintf(result->message, sizeof(result->message), "unreachable target: no jerk-limited profile reaches it within the limits");
         return -1;
@@ -1401,7 +1428,6 @@ static int plan(const JpRequest *rq, JpResult *result, Ph *scratch) {
     }
     double ceiling_T = INFINITY;
     int ceiling = shaped_move(&pl, &ceiling_T, ceiling_phases);
-    if (ceiling < 0) return -1;
     if (ceiling == 0) ceiling_T = INFINITY;
     Search s = {&pl, T0, rigid, ceiling_phases, ceiling_T, ceiling == 1, bounds, ringing};
     int have = 0;
