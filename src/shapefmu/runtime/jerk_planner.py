@@ -221,6 +221,10 @@ def plan_move(states, targets, limits, modes, straight=False, ts=None, ringing=N
     if not any(modes):
         return PlannedMove(T0, rigid, "rigid", T0, references, references, [None] * len(states), T0)
     ceiling = shaped_move(states, targets, limits, modes, straight)
+    if ceiling is not None and not _meets(ceiling[1], ceiling[0], modes, bounds, ringing):
+        # The shaper bounds the shaped move's own jerk steps against its rigid move's; a rigid move
+        # re-planned for a moving start, or ringing left by an earlier move, can still exceed.
+        ceiling = None
     ceiling_T = ceiling[0] if ceiling is not None else math.inf
 
     def attempt(T):
@@ -277,6 +281,13 @@ def plan_move(states, targets, limits, modes, straight=False, ts=None, ringing=N
                  for p, axis_modes, r in zip(phases, modes, ringing)]
     return PlannedMove(T, [vib.padded(p, T) for p in phases], method, T0, references, residuals,
                        ceiling[2] if ceiling is not None else [None] * len(states), ceiling_T)
+
+
+def _meets(phases, T, modes, bounds, ringing):
+    """Every mode of every axis within its bound (1e-9 relative) after ``phases`` ending at T."""
+    return all(vib.worst_amplitude(p, T, m, r) <= bound * (1.0 + 1e-9)
+               for p, axis_modes, axis_bounds, r in zip(phases, modes, bounds, ringing)
+               for m, bound in zip(axis_modes, axis_bounds))
 
 
 def _on_grid(T, ts):

@@ -31,7 +31,7 @@ def _state_problem(state, target, limits):
 
 
 def check_start_within(state, limits, name):
-    """The state with an acceleration within rounding (1e-9) of a limit put on the limit; refused
+    """The state with an acceleration or velocity within rounding (1e-9) of a limit put on it; refused
     if the limits will be broken whatever the jerk (the velocity keeps changing by a |a| / 2J
     while the acceleration is brought to zero)."""
     p, v, a = state
@@ -44,7 +44,8 @@ def check_start_within(state, limits, name):
     if not limits.v_min - v_tol <= reach <= limits.v_max + v_tol:
         raise ValueError(f"{name} velocity {v!r} with acceleration {a!r} reaches {reach!r} before the acceleration "
                          f"can be brought to zero; it must stay in [{limits.v_min!r}, {limits.v_max!r}]")
-    return p, v, a
+    # A state sampled on a move that cruises at a velocity limit may pass it by rounding.
+    return p, min(max(v, limits.v_min), limits.v_max), a
 
 
 def rigid_blocks(states, targets, limits):

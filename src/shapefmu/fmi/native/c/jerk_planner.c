@@ -592,6 +592,7 @@ static int check_start_within(double *state, const JpLimits *lim, char *message,
                  lim->v_min, lim->v_max);
         return -1;
     }
+    state[1] = min2(max2(v, lim->v_min), lim->v_max);
     state[2] = a;
     return 0;
 }
@@ -1428,6 +1429,13 @@ static int plan(const JpRequest *rq, JpResult *result, Ph *scratch) {
     }
     double ceiling_T = INFINITY;
     int ceiling = shaped_move(&pl, &ceiling_T, ceiling_phases);
+    if (ceiling == 1) {  /* _meets */
+        for (int i = 0; i < axes; i++)
+            for (int q = 0; q < rq->mode_count[i]; q++)
+                if (!(worst_amplitude(&ceiling_phases[i], ceiling_T, &rq->modes[i][q], ringing ? &ringing[i] : NULL)
+                      <= bounds[i][q] * (1.0 + 1e-9)))
+                    ceiling = 0;
+    }
     if (ceiling == 0) ceiling_T = INFINITY;
     Search s = {&pl, T0, rigid, ceiling_phases, ceiling_T, ceiling == 1, bounds, ringing};
     int have = 0;
