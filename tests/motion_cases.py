@@ -41,6 +41,12 @@ def random_problem(rng: random.Random, axes=None, rest_target=None):
     return states, targets, limits
 
 
+def random_targets(rng: random.Random, limits):
+    """A new target per axis for a re-plan, as an FMU's inputs give it: a position and a velocity
+    (acceleration 0) that ``limits`` allow."""
+    return [(rng.uniform(-2.0, 2.0), rng.uniform(lim.v_min, lim.v_max), 0.0) for lim in limits]
+
+
 def ruckig_trajectory(states, targets, limits):
     """Ruckig's trajectory for the problem, or None where Ruckig reports an error."""
     n = len(states)

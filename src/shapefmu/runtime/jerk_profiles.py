@@ -234,7 +234,12 @@ def velocity_change(v0, a0, v1, a1, a_max, a_min, j_max):
         direct = 0.0
     else:
         direct = (a1 * a1 - a0 * a0) / (2.0 * math.copysign(j_max, a1 - a0))
-    up = v1 - v0 > direct
+    # Within rounding of the direct ramp (a state sampled where a move brakes onto a limit) the
+    # ramp itself: the form whose first phase has no length.
+    if abs(v1 - v0 - direct) <= 1e-12 * (abs(v0) + abs(v1) + (a0 * a0 + a1 * a1) / j_max):
+        up = a1 < a0
+    else:
+        up = v1 - v0 > direct
     J = j_max if up else -j_max
     limit = a_max if up else a_min
     square = J * (v1 - v0) + 0.5 * (a0 * a0 + a1 * a1)
@@ -441,7 +446,8 @@ def profile_of_duration(problem, T, near=None, samples=24):
     It holds an acceleration level between two time-optimal velocity changes: a cruise (level 0)
     first, else the level of the target's or the start's acceleration, one of the levels the
     fastest profile ``near`` turns at (an axis whose acceleration never crosses zero near its
-    fastest move lengthens it by holding where it turns), then levels across the range. For each level, the velocity va at which the hold
+    fastest move lengthens it by holding where it turns), then levels across the range, and a
+    finer grid of them last. For each level, the velocity va at which the hold
     starts is searched in [v_min, v_max] on a grid and at the velocities where the profile ``near``
     (the axis's fastest) passes the level: just above t_min the answer is a small perturbation of
     that profile, in a window of va narrower than any grid. Where the two changes leave time to
@@ -455,20 +461,35 @@ def profile_of_duration(problem, T, near=None, samples=24):
         levels += [a for a in near.a[1:-1] if a not in levels]
     # Then levels across the range: the hold of an axis that ends turning hard can be anywhere.
     levels += [lim.a_min + (lim.a_max - lim.a_min) * k / (2 * samples) for k in range(1, 2 * samples)]
-    seeds = {level: _passing_velocities(near, level) if near is not None else [] for level in levels}
     for level in levels:
-        if not lim.a_min < level < lim.a_max and level != 0.0:
+        found = _with_hold(problem, T, level, near, samples)
+        if found is not None:
+            return found
+    found = _meeting_profile(problem, T, samples)
+    # Last, a grid four times finer: just above t_min the levels that work can be a narrow window.
+    for k in range(1, 8 * samples):
+        if found is not None or k % 4 == 0:
             continue
-        edges, points = _hold_points(problem, T, level, seeds[level], samples)
-        errors = [(va, _hold_profile(problem, T, level, va)) for va in points]
-        for (va, first), (vb, second) in zip(errors, errors[1:]):
-            if first is None or second is None or first[0] * second[0] > 0.0:
-                continue
-            phases = _refine_hold(problem, T, level, va, vb, first)
-            accepted = phases and problem.accept(phases.durations, phases.jerks)
-            if accepted:
-                return accepted
-    return _meeting_profile(problem, T, samples)
+        found = _with_hold(problem, T, lim.a_min + (lim.a_max - lim.a_min) * k / (8 * samples), near, samples)
+    return found
+
+
+def _with_hold(problem, T, level, near, samples):
+    """The profile lasting T that holds ``level`` (``profile_of_duration``), or None."""
+    lim = problem.limits
+    if not lim.a_min < level < lim.a_max and level != 0.0:
+        return None
+    seeds = _passing_velocities(near, level) if near is not None else []
+    _, points = _hold_points(problem, T, level, seeds, samples)
+    errors = [(va, _hold_profile(problem, T, level, va)) for va in points]
+    for (va, first), (vb, second) in zip(errors, errors[1:]):
+        if first is None or second is None or first[0] * second[0] > 0.0:
+            continue
+        phases = _refine_hold(problem, T, level, va, vb, first)
+        accepted = phases and problem.accept(phases.durations, phases.jerks)
+        if accepted:
+            return accepted
+    return None
 
 
 def _hold_points(problem, T, level, seeds, samples):

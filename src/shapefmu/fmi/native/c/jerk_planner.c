@@ -175,7 +175,8 @@ static int accept(const Problem *pr, const double *durations, const double *jerk
 static void velocity_change(double v0, double a0, double v1, double a1, double a_max, double a_min, double j_max,
                             double *t, double *j) {
     double direct = a1 == a0 ? 0.0 : (a1 * a1 - a0 * a0) / (2.0 * copysign(j_max, a1 - a0));
-    int up = v1 - v0 > direct;
+    int up = fabs(v1 - v0 - direct) <= 1e-12 * (fabs(v0) + fabs(v1) + (a0 * a0 + a1 * a1) / j_max) ? a1 < a0
+                                                                                                : v1 - v0 > direct;
     double J = up ? j_max : -j_max;
     double limit = up ? a_max : a_min;
     double square = J * (v1 - v0) + 0.5 * (a0 * a0 + a1 * a1);
@@ -528,6 +529,30 @@ static int meeting_profile(const Problem *pr, double T, Ph *out, Ph *tmp) {
     return 0;
 }
 
+/* _with_hold: 1 and *out, 0 for None */
+static int with_hold(const Problem *pr, double T, double level, const Ph *near, Ph *out) {
+    const JpLimits *lim = &pr->lim;
+    if (!(lim->a_min < level && level < lim->a_max) && level != 0.0) return 0;
+    static Ph first, second, refined;
+    double edges[MAX_POINTS], points[MAX_POINTS], seeds[16];
+    int n_seeds = near != NULL ? passing_velocities(near, level, seeds) : 0;
+    int ne, np;
+    hold_points(pr, T, level, seeds, n_seeds, edges, &ne, points, &np);
+    double e_prev = 0.0;
+    int ok_prev = 0;
+    for (int k = 0; k < np; k++) {
+        double e_now;
+        int ok_now = hold_profile(pr, T, level, points[k], &e_now, &second);
+        if (k > 0 && ok_prev && ok_now && !(e_prev * e_now > 0.0)) {
+            if (refine_hold(pr, T, level, points[k - 1], points[k], e_prev, &first, &refined)
+                && accept(pr, refined.d, refined.j, refined.n, out))
+                return 1;
+        }
+        e_prev = e_now; ok_prev = ok_now; first = second;
+    }
+    return 0;
+}
+
 /* profile_of_duration: 1 and *out, 0 for None */
 static int profile_of_duration(const Problem *pr, double T, const Ph *near, Ph *out) {
     const JpLimits *lim = &pr->lim;
@@ -542,28 +567,14 @@ static int profile_of_duration(const Problem *pr, double T, const Ph *near, Ph *
         }
     }
     for (int k = 1; k < 2 * SAMPLES; k++) levels[nl++] = lim->a_min + (lim->a_max - lim->a_min) * k / (2 * SAMPLES);
-    Ph first, second, refined;
-    double edges[MAX_POINTS], points[MAX_POINTS], seeds[16];
-    for (int l = 0; l < nl; l++) {
-        double level = levels[l];
-        if (!(lim->a_min < level && level < lim->a_max) && level != 0.0) continue;
-        int n_seeds = near != NULL ? passing_velocities(near, level, seeds) : 0;
-        int ne, np;
-        hold_points(pr, T, level, seeds, n_seeds, edges, &ne, points, &np);
-        double e_prev = 0.0;
-        int ok_prev = 0;
-        for (int k = 0; k < np; k++) {
-            double e_now;
-            int ok_now = hold_profile(pr, T, level, points[k], &e_now, &second);
-            if (k > 0 && ok_prev && ok_now && !(e_prev * e_now > 0.0)) {
-                if (refine_hold(pr, T, level, points[k - 1], points[k], e_prev, &first, &refined)
-                    && accept(pr, refined.d, refined.j, refined.n, out))
-                    return 1;
-            }
-            e_prev = e_now; ok_prev = ok_now; first = second;
-        }
+    for (int l = 0; l < nl; l++) if (with_hold(pr, T, levels[l], near, out)) return 1;
+    static Ph tmp;
+    if (meeting_profile(pr, T, out, &tmp)) return 1;
+    for (int k = 1; k < 8 * SAMPLES; k++) {
+        if (k % 4 == 0) continue;
+        if (with_hold(pr, T, lim->a_min + (lim->a_max - lim->a_min) * k / (8 * SAMPLES), near, out)) return 1;
     }
-    return meeting_profile(pr, T, out, &refined);
+    return 0;
 }
 
 /* ------------------------------------------------------------------------------------------------

@@ -1,0 +1,119 @@
+"""The C twin of the planner (fmi/native/c/jerk_planner.c) plans what the Python kernel plans, and
+on 10,000 random starts and mid-move re-plans its moves end exactly in the target within the limits.
+
+References: the Python kernel (runtime.jerk_planner) for the twin; Ruckig for the rigid durations;
+the limits and the end state checked on the exact polynomials of every phase.
+"""
+
+import math
+import random
+
+import pytest
+
+from motion_cases import random_problem, random_targets, ruckig_trajectory
+from shapefmu.fmi.native import jerk_planner as native
+from shapefmu.runtime import jerk_planner, jerk_vibration
+from shapefmu.runtime.jerk_profiles import Limits
+from test_motion_rigid import _assert_within
+
+
+def _same(python, c):
+    assert c.duration == pytest.approx(python.duration, rel=1e-12, abs=0.0)
+    assert c.method == python.method
+    for p, q in zip(python.phases, c.phases):
+        assert len(p.durations) == len(q.durations)
+        assert q.durations == pytest.approx(p.durations, rel=1e-12, abs=1e-12 * python.duration)
+        assert q.jerks == pytest.approx(p.jerks, rel=1e-12, abs=0.0)
+
+
+@pytest.mark.parametrize("delta", [0.0, 0.05])
+def test_the_twin_plans_the_40_hz_example_as_python_does(delta):
+    modes = [[jerk_vibration.Mode(2 * math.pi * 40.0, 0.05, delta, 0.01)]]
+    args = ([(0.0, 0.0, 0.0)], [(0.01, 0.0, 0.0)], [Limits(0.3, 5.0, 2000.0)], modes)
+    _same(jerk_planner.plan_move(*args), native.plan(*args))
+
+
+def test_the_twin_plans_random_moves_with_modes_as_python_does():
+    rng = random.Random(11)
+    compared = 0
+    while compared < 3:
+        states, targets, limits = random_problem(rng, rest_target=True)
+        modes = [[jerk_vibration.Mode(2 * math.pi * rng.uniform(2.0, 8.0), 0.05, 0.0, 0.01)] for _ in states]
+        try:
+            python = jerk_planner.plan_move(states, targets, limits, modes)
+        except ValueError as error:
+            with pytest.raises(ValueError) as twin:
+                native.plan(states, targets, limits, modes)
+            assert str(twin.value) == str(error)
+            continue
+        _same(python, native.plan(states, targets, limits, modes))
+        compared += 1
+
+
+def test_the_twin_plans_random_rigid_moves_as_python_does():
+    rng = random.Random(5)
+    for _ in range(200):
+        states, targets, limits = random_problem(rng)
+        none = [[] for _ in states]
+        _same(jerk_planner.plan_move(states, targets, limits, none), native.plan(states, targets, limits, none))
+
+
+def test_10000_random_starts_and_mid_move_replans_end_in_the_target_within_the_limits():
+    # Random states within the limits, random targets; then a re-plan from the state at a random
+    # instant of that move to a new random target. The durations are Ruckig's.
+    rng = random.Random(10_000)
+    for case in range(5_000):
+        states, targets, limits = random_problem(rng)
+        none = [[] for _ in states]
+        move = native.plan(states, targets, limits, none)
+        if case % 50 == 0:
+            assert move.duration == pytest.approx(ruckig_trajectory(states, targets, limits).duration, rel=1e-9)
+        _check(move, targets, limits)
+        switch = rng.uniform(0.0, move.duration)
+        now = [phases.state(switch)[:3] for phases in move.phases]
+        new_targets = random_targets(rng, limits)
+        replanned = native.plan(now, new_targets, limits, none)
+        for phases, state in zip(replanned.phases, now):
+            assert phases.state(0.0)[:3] == pytest.approx(state, abs=1e-9)
+        _check(replanned, new_targets, limits)
+
+
+def _check(move, targets, limits):
+    for phases, target, lim in zip(move.phases, targets, limits):
+        assert phases.duration == pytest.approx(move.duration, rel=1e-12)
+        assert phases.end() == pytest.approx(target, rel=1e-9, abs=1e-9)
+        _assert_within(phases, lim)
+
+
+def test_random_moves_with_modes_never_break_a_limit_or_a_bound():
+    # Moving starts, 1-3 axes, a mode per axis, bands 0-10 %: every move returned holds its limits
+    # and every mode's bound over its band (the residual here by the jerk-step sum at 41 points of
+    # the band; test_motion_vibration checks it by integrating the mode); a start from which no
+    # move is found gets a one-line message naming the bound.
+    rng = random.Random(36)
+    refused = 0
+    for _ in range(60):
+        states, targets, limits = random_problem(rng, rest_target=True)
+        delta = rng.choice([0.0, 0.05, 0.1])
+        modes = [[jerk_vibration.Mode(2 * math.pi * rng.uniform(2.0, 8.0), 0.05, delta, 0.01)] for _ in states]
+        try:
+            move = native.plan(states, targets, limits, modes)
+        except ValueError as error:
+            assert "vibration bounds" in str(error) and "\n" not in str(error)
+            refused += 1
+            continue
+        _check(move, targets, limits)
+        assert move.duration <= move.ceiling_duration
+        for phases, axis_modes, references in zip(move.phases, modes, move.references):
+            for mode, reference in zip(axis_modes, references):
+                band = [mode.omega * (1 - delta + 2 * delta * k / 40) for k in range(41)]
+                worst = max(jerk_vibration.amplitude(phases.durations, phases.jerks, move.duration, w, mode.zeta)
+                            for w in band)
+                assert worst <= mode.vtol * reference * (1 + 1e-6)
+    assert refused <= 6, f"{refused} of 60 starts found no move"
+
+
+def test_a_start_that_must_break_a_limit_is_refused_with_its_numbers():
+    lim = Limits(1.0, 2.0, 4.0)
+    with pytest.raises(ValueError, match=r"axis 0: initial velocity 0\.9 with acceleration 2 reaches 1\.4"):
+        native.plan([(0.0, 0.9, 2.0)], [(1.0, 0.0, 0.0)], [lim], [[]])
