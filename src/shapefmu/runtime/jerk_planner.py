@@ -35,6 +35,7 @@ _RETIMED = 0.85
 # Single-mode shapers of the catalog with non-negative impulses (a convolution keeps the jerk and
 # acceleration within the rigid move's), tried shortest first for each axis.
 CEILING_KINDS = ("zv", "mzv", "ei", "zvd", "ei2", "zvdd", "ei3")
+MAX_CEILING_SHAPERS = 8
 
 
 class PlannedMove:
@@ -76,36 +77,43 @@ def _shaper_residual(times, amplitudes, omega, zeta):
     return abs(sum(A * cmath.exp(s * (end - t)) for t, A in zip(times, amplitudes))) / sum(amplitudes)
 
 
-def shortest_shaper(modes, duration_hint=1.0):
-    """(kind, times, amplitudes) of the shortest catalog shaper (``CEILING_KINDS``, convolved over
-    the modes) whose residual is within every mode's vtol over its band, or None."""
-    best = None
-    for kind in CEILING_KINDS:
-        times, amplitudes = design_impulses(kind, [(m.omega, m.zeta) for m in modes],
-                                            vtol=min(m.vtol for m in modes))
-        if best is not None and times[-1] >= best[1][-1]:
-            continue
+def catalog_shapers(modes, duration_hint=1.0):
+    """[(kind, times, amplitudes)] of the catalog shapers (``CEILING_KINDS``, and the extra-
+    insensitive ones for vtol / 2, / 4, / 8, each convolved over the modes) whose own residual is
+    within every mode's vtol over its band, shortest first, at most ``MAX_CEILING_SHAPERS``."""
+    vtol = min(m.vtol for m in modes)
+    designs = [(kind, kind, vtol) for kind in CEILING_KINDS]
+    designs += [(f"{kind}(vtol/{k})", kind, vtol / k) for k in (2, 4, 8) for kind in ("ei", "ei2", "ei3")]
+    found = []
+    for name, kind, tolerance in designs:
+        times, amplitudes = design_impulses(kind, [(m.omega, m.zeta) for m in modes], vtol=tolerance)
         if all(_shaper_residual(times, amplitudes, omega, m.zeta) <= m.vtol
                for m in modes for omega in m.band(duration_hint + times[-1])):
-            best = (kind, times, amplitudes)
-    return best
+            found.append((name, times, amplitudes))
+    found.sort(key=lambda shaper: shaper[1][-1])
+    return found[:MAX_CEILING_SHAPERS]
 
 
-def shaped_move(states, targets, limits, modes, straight=False, iterations=40):
-    """(duration, [Phases], [(kind, times, amplitudes) or None]) of the rigid move followed, per
-    axis, by its shortest shaper (the ceiling), the rigid targets corrected by a fixed point so
-    that the shaped axes end in ``targets``; None if an axis has no shaper within its bound or
-    the shaped move leaves the limits."""
+def shaped_move(states, targets, limits, modes, bounds, ringing, straight=False, iterations=40):
+    """(duration, [Phases], [(kind, times, amplitudes) or None]) of the ceiling: the rigid move
+    followed, per axis, by the shortest catalog shaper (``catalog_shapers``) with which the shaped
+    move holds the limits and every mode's bound (the k-th shaper of every axis tried together, k
+    increasing), the rigid targets corrected by a fixed point so that the shaped axes end in
+    ``targets``; None if no shaper does."""
     T0, rigid = _rigid(states, targets, limits, straight)
-    shapers = []
-    for axis_modes in modes:
-        if not axis_modes:
-            shapers.append(None)
-            continue
-        found = shortest_shaper(axis_modes, T0)
-        if found is None:
-            return None
-        shapers.append(found)
+    lists = [catalog_shapers(axis_modes, T0) if axis_modes else [None] for axis_modes in modes]
+    if not all(lists):
+        return None
+    for k in range(max(len(options) for options in lists)):
+        shapers = [options[min(k, len(options) - 1)] for options in lists]
+        shaped = _within_limits(states, targets, limits, shapers, straight, iterations)
+        if shaped is not None and _meets(shaped[1], shaped[0], modes, bounds, ringing):
+            return (*shaped, shapers)
+    return None
+
+
+def _within_limits(states, targets, limits, shapers, straight, iterations):
+    """(duration, [Phases]) of the rigid move shaped with ``shapers``, within the limits, or None."""
     # From a moving start the shaper keeps part of the initial acceleration on for its length, and
     # the shaped velocity can pass a limit the rigid move only touched: the rigid move is planned
     # again within velocity limits narrowed by what the shaped one passed them by (three times).
@@ -117,7 +125,7 @@ def shaped_move(states, targets, limits, modes, straight=False, iterations=40):
         duration = max(p.duration for p in shaped)
         shaped = [vib.padded(p, duration) for p in shaped]
         if all(_within(phases, lim, target) for phases, lim, target in zip(shaped, limits, targets)):
-            return duration, shaped, shapers
+            return duration, shaped
         narrowed = []
         for phases, lim, plan in zip(shaped, limits, planned):
             v_low, v_high, _, _ = phases.extrema()
@@ -220,11 +228,7 @@ def plan_move(states, targets, limits, modes, straight=False, ts=None, ringing=N
     bounds = [[m.vtol * ref for m, ref in zip(axis_modes, refs)] for axis_modes, refs in zip(modes, references)]
     if not any(modes):
         return PlannedMove(T0, rigid, "rigid", T0, references, references, [None] * len(states), T0)
-    ceiling = shaped_move(states, targets, limits, modes, straight)
-    if ceiling is not None and not _meets(ceiling[1], ceiling[0], modes, bounds, ringing):
-        # The shaper bounds the shaped move's own jerk steps against its rigid move's; a rigid move
-        # re-planned for a moving start, or ringing left by an earlier move, can still exceed.
-        ceiling = None
+    ceiling = shaped_move(states, targets, limits, modes, bounds, ringing, straight)
     ceiling_T = ceiling[0] if ceiling is not None else math.inf
 
     def attempt(T):

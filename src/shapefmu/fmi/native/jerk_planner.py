@@ -5,7 +5,7 @@ benchmark times beside Ruckig. The FMU that will carry it waits for the FMU kind
 ``NativePlanner().plan(states, targets, limits, modes, ...)`` takes the runtime kernel's arguments
 (``Limits``, ``jerk_vibration.Mode``) and returns a ``runtime.jerk_planner.PlannedMove``; the ceiling's
 shapers, which depend only on the modes, are designed here in Python first
-(``runtime.jerk_planner.shortest_shaper``), as a native FMU designs them at build time.
+(``runtime.jerk_planner.catalog_shapers``), as a native FMU designs them at build time.
 """
 
 from __future__ import annotations
@@ -17,11 +17,11 @@ import tempfile
 from pathlib import Path
 
 from shapefmu.fmi.compiler import run_compiler
-from shapefmu.runtime.jerk_planner import PlannedMove, shortest_shaper
+from shapefmu.runtime.jerk_planner import MAX_CEILING_SHAPERS, PlannedMove, catalog_shapers
 from shapefmu.runtime.jerk_profiles import Phases
 
 SOURCE = Path(__file__).parent / "c" / "jerk_planner.c"
-MAX_AXES, MAX_MODES, MAX_PHASES, MAX_IMPULSES = 8, 4, 256, 64
+MAX_AXES, MAX_MODES, MAX_PHASES, MAX_IMPULSES, MAX_SHAPERS = 8, 4, 256, 64, MAX_CEILING_SHAPERS
 METHODS = ("rigid", "cancel", "shaped")
 
 
@@ -47,13 +47,15 @@ class _Request(ctypes.Structure):
     _fields_ = [("axes", ctypes.c_int), ("states", (ctypes.c_double * 3) * MAX_AXES),
                 ("targets", (ctypes.c_double * 3) * MAX_AXES), ("limits", _Limits * MAX_AXES),
                 ("mode_count", ctypes.c_int * MAX_AXES), ("modes", (_Mode * MAX_MODES) * MAX_AXES),
-                ("ceiling", _Shaper * MAX_AXES), ("straight", ctypes.c_int), ("ts", ctypes.c_double),
+                ("ceiling_count", ctypes.c_int * MAX_AXES), ("ceiling", (_Shaper * MAX_SHAPERS) * MAX_AXES),
+                ("straight", ctypes.c_int), ("ts", ctypes.c_double),
                 ("history", ctypes.POINTER(_AxisPhases))]
 
 
 class _Result(ctypes.Structure):
     _fields_ = [("duration", ctypes.c_double), ("rigid_duration", ctypes.c_double),
-                ("ceiling_duration", ctypes.c_double), ("method", ctypes.c_int), ("phases", _AxisPhases * MAX_AXES),
+                ("ceiling_duration", ctypes.c_double), ("method", ctypes.c_int),
+                ("ceiling_choice", ctypes.c_int * MAX_AXES), ("phases", _AxisPhases * MAX_AXES),
                 ("references", (ctypes.c_double * MAX_MODES) * MAX_AXES),
                 ("residuals", (ctypes.c_double * MAX_MODES) * MAX_AXES), ("message", ctypes.c_char * 256)]
 
@@ -92,14 +94,12 @@ def _request(states, targets, limits, modes=None, shapers=None, straight=False, 
         request.mode_count[i] = len(axis_modes)
         for q, mode in enumerate(axis_modes):
             request.modes[i][q] = _Mode(mode.omega, mode.zeta, mode.delta, mode.vtol)
-        shaper = shapers[i] if shapers else None
-        if shaper is not None:
-            _, times, amplitudes = shaper
-            if len(times) > MAX_IMPULSES:
-                raise ValueError(f"the ceiling shaper of axis {i} has {len(times)} impulses, more than {MAX_IMPULSES}")
-            request.ceiling[i].count = len(times)
-            request.ceiling[i].times[: len(times)] = times
-            request.ceiling[i].amplitudes[: len(times)] = amplitudes
+        options = [shaper for shaper in (shapers[i] if shapers else []) if len(shaper[1]) <= MAX_IMPULSES]
+        request.ceiling_count[i] = len(options[:MAX_SHAPERS])
+        for k, (_, times, amplitudes) in enumerate(options[:MAX_SHAPERS]):
+            request.ceiling[i][k].count = len(times)
+            request.ceiling[i][k].times[: len(times)] = times
+            request.ceiling[i][k].amplitudes[: len(times)] = amplitudes
     request.straight = int(bool(straight))
     request.ts = float(ts) if ts is not None else 0.0
     if history is not None:
@@ -125,24 +125,16 @@ def rigid_duration(states, targets, limits) -> float:
 
 
 def ceiling_shapers(states, targets, limits, modes):
-    """Per axis the shortest catalog shaper of its modes (None without modes), designed with the
-    rigid duration as ``runtime.jerk_planner.shaped_move`` does; None if an axis has none."""
+    """Per axis the catalog shapers of its modes, shortest first (``catalog_shapers``, designed with
+    the rigid duration as ``runtime.jerk_planner.shaped_move`` does); [] for an axis without modes."""
     T0 = rigid_duration(states, targets, limits)
-    shapers = []
-    for axis_modes in modes:
-        if not axis_modes:
-            shapers.append(None)
-            continue
-        found = shortest_shaper(axis_modes, T0)
-        if found is None:
-            return None
-        shapers.append(found)
-    return shapers
+    return [catalog_shapers(axis_modes, T0) if axis_modes else [] for axis_modes in modes]
 
 
 def plan(states, targets, limits, modes, straight=False, ts=None, history=None, shapers=None) -> PlannedMove:
     """``runtime.jerk_planner.plan_move`` in C. ``history``: per axis the ``Phases`` of the jerk
-    since the first start (a re-plan); ``shapers`` the ceiling's (``ceiling_shapers`` by default)."""
+    since the first start (a re-plan); ``shapers`` the ceiling's candidates (``ceiling_shapers`` by
+    default)."""
     if shapers is None and any(modes):
         shapers = ceiling_shapers(states, targets, limits, modes)
     request = _request(states, targets, limits, modes, shapers, straight, ts, history)
@@ -156,7 +148,9 @@ def plan(states, targets, limits, modes, straight=False, ts=None, history=None, 
     counts = [len(m) for m in modes] if modes else [0] * len(states)
     references = [list(result.references[i][:c]) for i, c in enumerate(counts)]
     residuals = [list(result.residuals[i][:c]) for i, c in enumerate(counts)]
-    ceiling = shapers if shapers is not None else [None] * len(states)
     ceiling_duration = result.ceiling_duration if math.isfinite(result.ceiling_duration) else math.inf
+    ceiling = [None] * len(states)
+    if shapers is not None and math.isfinite(ceiling_duration):
+        ceiling = [options[result.ceiling_choice[i]] if options else None for i, options in enumerate(shapers)]
     return PlannedMove(result.duration, phases, METHODS[result.method], result.rigid_duration, references, residuals,
                        ceiling, ceiling_duration)

@@ -591,15 +591,15 @@ static int check_start_within(double *state, const JpLimits *lim, char *message,
     double a_tol = 1e-9 * max2(lim->a_max, -lim->a_min), v_tol = 1e-9 * max2(lim->v_max, -lim->v_min);
     (void)p;
     if (!(lim->a_min - a_tol <= a && a <= lim->a_max + a_tol)) {
-        snprintf(message, (size_t)size, "axis %d: initial acceleration must be in [%.17g, %.17g], got %.17g", axis,
+        snprintf(message, (size_t)size, "axis %d: initial acceleration must be in [%.12g, %.12g], got %.12g", axis,
                  lim->a_min, lim->a_max, a);
         return -1;
     }
     a = min2(max2(a, lim->a_min), lim->a_max);
     double reach = v + a * fabs(a) / (2.0 * lim->j_max);
     if (!(lim->v_min - v_tol <= reach && reach <= lim->v_max + v_tol)) {
-        snprintf(message, (size_t)size, "axis %d: initial velocity %.17g with acceleration %.17g reaches %.17g before "
-                 "the acceleration can be brought to zero; it must stay in [%.17g, %.17g]", axis, v, a, reach,
+        snprintf(message, (size_t)size, "axis %d: initial velocity %.12g with acceleration %.12g reaches %.12g before "
+                 "the acceleration can be brought to zero; it must stay in [%.12g, %.12g]", axis, v, a, reach,
                  lim->v_min, lim->v_max);
         return -1;
     }
@@ -1220,7 +1220,7 @@ static int plan_rigid(Planner *pl, double (*targets)[3], const JpLimits *limits,
 }
 
 /* _shaped_fixed_point: 1 and shaped[], 0 for None */
-static int shaped_fixed_point(Planner *pl, const JpLimits *planned, Ph *shaped) {
+static int shaped_fixed_point(Planner *pl, const JpLimits *planned, const JpShaper *const *shapers, Ph *shaped) {
     const JpRequest *rq = pl->rq;
     int axes = rq->axes;
     double corrected[JP_MAX_AXES][3];
@@ -1236,7 +1236,7 @@ static int shaped_fixed_point(Planner *pl, const JpLimits *planned, Ph *shaped) 
         if (status != 0) return 0;
         double error = 0.0;
         for (int i = 0; i < axes; i++) {
-            if (rq->ceiling[i].count > 0) { if (convolve_jerk(&rigid[i], &rq->ceiling[i], &shaped[i]) != 0) return 0; }
+            if (shapers[i] != NULL) { if (convolve_jerk(&rigid[i], shapers[i], &shaped[i]) != 0) return 0; }
             else shaped[i] = rigid[i];
             int n = shaped[i].n;
             double p = shaped[i].p[n], v = shaped[i].v[n];
@@ -1251,15 +1251,14 @@ static int shaped_fixed_point(Planner *pl, const JpLimits *planned, Ph *shaped) 
     return 1;
 }
 
-/* shaped_move: 1 and (duration, shaped[]), 0 for None */
-static int shaped_move(Planner *pl, double *duration, Ph *shaped) {
+/* _within_limits: 1 and (duration, shaped[]), 0 for None */
+static int within_limits(Planner *pl, const JpShaper *const *shapers, double *duration, Ph *shaped) {
     const JpRequest *rq = pl->rq;
     int axes = rq->axes;
-    for (int i = 0; i < axes; i++) if (rq->mode_count[i] > 0 && rq->ceiling[i].count == 0) return 0;
     JpLimits planned[JP_MAX_AXES];
     memcpy(planned, rq->limits, sizeof(JpLimits) * (size_t)axes);
     for (int round = 0; round < 4; round++) {
-        if (!shaped_fixed_point(pl, planned, shaped)) return 0;
+        if (!shaped_fixed_point(pl, planned, shapers, shaped)) return 0;
         double T = -INFINITY;
         for (int i = 0; i < axes; i++) T = max2(T, ph_duration(&shaped[i]));
         int all = 1;
@@ -1280,6 +1279,36 @@ static int shaped_move(Planner *pl, double *duration, Ph *shaped) {
             planned[i].v_max = high;
             planned[i].v_min = low;
         }
+    }
+    return 0;
+}
+
+/* _meets */
+static int meets(const Ph *phases, double T, const JpRequest *rq, double (*bounds)[JP_MAX_MODES], const History *ringing) {
+    for (int i = 0; i < rq->axes; i++)
+        for (int q = 0; q < rq->mode_count[i]; q++)
+            if (!(worst_amplitude(&phases[i], T, &rq->modes[i][q], ringing ? &ringing[i] : NULL) <= bounds[i][q] * (1.0 + 1e-9)))
+                return 0;
+    return 1;
+}
+
+/* shaped_move: 1 and (duration, shaped[], choice[]), 0 for None */
+static int shaped_move(Planner *pl, double (*bounds)[JP_MAX_MODES], const History *ringing, double *duration,
+                       Ph *shaped, int *choice) {
+    const JpRequest *rq = pl->rq;
+    int axes = rq->axes, most = 1;
+    for (int i = 0; i < axes; i++) {
+        if (rq->mode_count[i] > 0 && rq->ceiling_count[i] == 0) return 0;
+        if (rq->ceiling_count[i] > most) most = rq->ceiling_count[i];
+    }
+    for (int k = 0; k < most; k++) {
+        const JpShaper *shapers[JP_MAX_AXES];
+        for (int i = 0; i < axes; i++) {
+            int count = rq->mode_count[i] > 0 ? rq->ceiling_count[i] : 0;
+            choice[i] = count ? (k < count ? k : count - 1) : -1;
+            shapers[i] = count ? &rq->ceiling[i][choice[i]] : NULL;
+        }
+        if (within_limits(pl, shapers, duration, shaped) && meets(shaped, *duration, rq, bounds, ringing)) return 1;
     }
     return 0;
 }
@@ -1412,7 +1441,7 @@ static int plan(const JpRequest *rq, JpResult *result, Ph *scratch) {
             T += rq->ts;
         }
         if (!ok) {
-            snprintf(result->message, sizeof(result->message), "no multiple of ts = %.17g s near the move's duration %.17g s "
+            snprintf(result->message, sizeof(result->message), "no multiple of ts = %.12g s near the move's duration %.12g s "
                      "is possible for every axis", rq->ts, T0);
             return -1;
         }
@@ -1439,14 +1468,7 @@ static int plan(const JpRequest *rq, JpResult *result, Ph *scratch) {
         return 0;
     }
     double ceiling_T = INFINITY;
-    int ceiling = shaped_move(&pl, &ceiling_T, ceiling_phases);
-    if (ceiling == 1) {  /* _meets */
-        for (int i = 0; i < axes; i++)
-            for (int q = 0; q < rq->mode_count[i]; q++)
-                if (!(worst_amplitude(&ceiling_phases[i], ceiling_T, &rq->modes[i][q], ringing ? &ringing[i] : NULL)
-                      <= bounds[i][q] * (1.0 + 1e-9)))
-                    ceiling = 0;
-    }
+    int ceiling = shaped_move(&pl, bounds, ringing, &ceiling_T, ceiling_phases, result->ceiling_choice);
     if (ceiling == 0) ceiling_T = INFINITY;
     Search s = {&pl, T0, rigid, ceiling_phases, ceiling_T, ceiling == 1, bounds, ringing};
     int have = 0;

@@ -2,9 +2,9 @@
  * runtime/jerk_profiles.py, jerk_sync.py, jerk_vibration.py and jerk_planner.py, operation for
  * operation, so that a native FMU plans what the Python kernel plans (to rounding).
  *
- * What differs from the Python kernel: the ceiling's shapers (the shortest catalog shaper of every
- * axis, which depends only on the axis's modes, band and vtol) are designed once by the caller and
- * passed in, as a native FMU does at build time; the ringing a re-planned move inherits is given as
+ * What differs from the Python kernel: the ceiling's shapers (the catalog shapers of every axis that
+ * meet its band and vtol, which depend only on its modes) are designed once by the caller and passed
+ * in, shortest first, as a native FMU does at build time; the ringing a re-planned move inherits is given as
  * the jerk history (phases) since the first start rather than as a function. */
 #ifndef JERK_PLANNER_H
 #define JERK_PLANNER_H
@@ -13,6 +13,7 @@
 #define JP_MAX_MODES 4       /* per axis */
 #define JP_MAX_PHASES 256    /* per axis and move */
 #define JP_MAX_IMPULSES 64   /* per ceiling shaper */
+#define JP_MAX_SHAPERS 8     /* ceiling shapers per axis, shortest first */
 
 typedef struct {
     double v_max, v_min, a_max, a_min, j_max;  /* v_min, a_min < 0 */
@@ -39,15 +40,17 @@ typedef struct {
     JpLimits limits[JP_MAX_AXES];
     int mode_count[JP_MAX_AXES];
     JpMode modes[JP_MAX_AXES][JP_MAX_MODES];
-    JpShaper ceiling[JP_MAX_AXES];
+    int ceiling_count[JP_MAX_AXES];  /* 0 for an axis without modes (or none of the catalog fits) */
+    JpShaper ceiling[JP_MAX_AXES][JP_MAX_SHAPERS];
     int straight;              /* along the straight line between the positions */
     double ts;                 /* > 0: the duration a whole number of periods ts */
     const JpAxisPhases *history;  /* NULL, or per axis the jerk since the first start (a re-plan) */
 } JpRequest;
 
 typedef struct {
-    double duration, rigid_duration, ceiling_duration;  /* ceiling: inf when it leaves the limits */
+    double duration, rigid_duration, ceiling_duration;  /* ceiling: inf when no shaper keeps the limits and bounds */
     int method;  /* 0 rigid, 1 cancel, 2 shaped */
+    int ceiling_choice[JP_MAX_AXES];  /* the index of the ceiling's shaper of every axis */
     JpAxisPhases phases[JP_MAX_AXES];
     double references[JP_MAX_AXES][JP_MAX_MODES], residuals[JP_MAX_AXES][JP_MAX_MODES];
     char message[256];  /* why, when jp_plan returns nonzero */
