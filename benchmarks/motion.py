@@ -24,33 +24,17 @@ import random
 import statistics
 import time
 
-from ruckig import InputParameter, Result, Ruckig, Trajectory
-
 from shapefmu.fmi.native import jerk_planner as native
+from shapefmu.motion.peers import ruckig_move
 from shapefmu.optimal import jerk_limited_optimum
 from shapefmu.runtime.jerk_profiles import Limits
 from shapefmu.runtime.jerk_vibration import Mode
 
 
-def ruckig_move(states, targets, limits):
-    """(duration, seconds of calculate) of Ruckig's rigid move."""
-    n = len(states)
-    generator, request, trajectory = Ruckig(n), InputParameter(n), Trajectory(n)
-    request.current_position = [s[0] for s in states]
-    request.current_velocity = [s[1] for s in states]
-    request.current_acceleration = [s[2] for s in states]
-    request.target_position = [t[0] for t in targets]
-    request.target_velocity = [t[1] for t in targets]
-    request.target_acceleration = [t[2] for t in targets]
-    request.max_velocity = [lim.v_max for lim in limits]
-    request.min_velocity = [lim.v_min for lim in limits]
-    request.max_acceleration = [lim.a_max for lim in limits]
-    request.min_acceleration = [lim.a_min for lim in limits]
-    request.max_jerk = [lim.j_max for lim in limits]
-    started = time.perf_counter()
-    result = generator.calculate(request, trajectory)
-    elapsed = time.perf_counter() - started
-    return (trajectory.duration if result in (Result.Working, Result.Finished) else None), elapsed
+def ruckig_rigid(states, targets, limits):
+    """(Ruckig's duration or None, seconds its calculate took)."""
+    trajectory, seconds = ruckig_move(states, targets, limits)
+    return (None if trajectory is None else trajectory.duration), seconds
 
 
 def random_problem(rng, axes, modes_per_axis):
@@ -78,7 +62,7 @@ def example() -> float:
     lim = Limits(0.3, 5.0, 2000.0)
     args = ([(0.0, 0.0, 0.0)], [(0.01, 0.0, 0.0)], [lim], [[Mode(2 * math.pi * 40.0, 0.05, 0.0, 0.01)]])
     move = native.plan(*args)
-    peer, _ = ruckig_move(*args[:3])
+    peer, _ = ruckig_rigid(*args[:3])
     print("1. the 40 Hz example (10 mm, 0.3 m/s, 5 m/s^2, 2000 m/s^3, zeta 0.05, vtol 1 %, band 0)")
     print(f"   Ruckig                 {1e3 * peer:9.3f} ms   (issue: 91.98)   our rigid core {1e3 * move.rigid_duration:.3f} ms")
     print(f"   Ruckig + {move.ceiling[0][0]:<13} {1e3 * move.ceiling_duration:9.3f} ms   (issue: 104.5)")
@@ -143,7 +127,7 @@ def speed(count, rng):
         except ValueError:
             pass
         ours.append(time.perf_counter() - started)
-        theirs.append(min(ruckig_move(states, targets, limits)[1] for _ in range(5)))
+        theirs.append(min(ruckig_rigid(states, targets, limits)[1] for _ in range(5)))
     mine, peer = statistics.median(ours), statistics.median(theirs)
     print(f"   median: C planner {1e6 * mine:.1f} us, Ruckig {1e6 * peer:.1f} us, ratio {mine / peer:.1f}x "
           f"(target <= 10x: {'holds' if mine <= 10 * peer else 'FAILS'})")

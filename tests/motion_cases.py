@@ -10,9 +10,10 @@ import random
 
 import pytest
 
+from shapefmu.motion.peers import ruckig_move
 from shapefmu.runtime.jerk_profiles import Limits
 
-ruckig = pytest.importorskip("ruckig")
+pytest.importorskip("ruckig")
 
 
 def _safe(rng, lim):
@@ -49,19 +50,4 @@ def random_targets(rng: random.Random, limits):
 
 def ruckig_trajectory(states, targets, limits):
     """Ruckig's trajectory for the problem, or None where Ruckig reports an error."""
-    n = len(states)
-    generator, request, trajectory = ruckig.Ruckig(n), ruckig.InputParameter(n), ruckig.Trajectory(n)
-    request.current_position = [s[0] for s in states]
-    request.current_velocity = [s[1] for s in states]
-    request.current_acceleration = [s[2] for s in states]
-    request.target_position = [t[0] for t in targets]
-    request.target_velocity = [t[1] for t in targets]
-    request.target_acceleration = [t[2] for t in targets]
-    request.max_velocity = [lim.v_max for lim in limits]
-    request.min_velocity = [lim.v_min for lim in limits]
-    request.max_acceleration = [lim.a_max for lim in limits]
-    request.min_acceleration = [lim.a_min for lim in limits]
-    request.max_jerk = [lim.j_max for lim in limits]
-    if generator.calculate(request, trajectory) not in (ruckig.Result.Working, ruckig.Result.Finished):
-        return None
-    return trajectory
+    return ruckig_move(states, targets, limits)[0]

@@ -1,19 +1,21 @@
 """Ruckig (pip ``ruckig``, MIT) beside the planner: a test and benchmark peer, never a dependency.
 
-``ruckig_duration`` is None when ``ruckig`` is not installed; it plans the same rigid move with
-Ruckig's own code so that a command or a benchmark can print both side by side.
+``ruckig_move`` plans the same rigid move with Ruckig's own code, so that a command, a test or a
+benchmark can set both side by side; without ``ruckig`` installed it returns (None, 0.0).
 """
 
 from __future__ import annotations
 
+import time
 
-def ruckig_duration(states, targets, limits, straight=False):
-    """Ruckig's synchronised duration from ``states`` to ``targets`` [(p, v, a)] within ``limits``
-    (``AxisLimits`` or runtime ``Limits``), or None without ``ruckig``."""
+
+def ruckig_move(states, targets, limits, straight=False):
+    """(Ruckig's trajectory or None where it reports an error, seconds its ``calculate`` took) from
+    ``states`` to ``targets`` [(p, v, a)] within ``limits`` (``AxisLimits`` or runtime ``Limits``)."""
     try:
         from ruckig import InputParameter, Result, Ruckig, Synchronization, Trajectory
     except ImportError:
-        return None
+        return None, 0.0
     n = len(states)
     generator, request, trajectory = Ruckig(n), InputParameter(n), Trajectory(n)
     request.current_position = [s[0] for s in states]
@@ -29,6 +31,13 @@ def ruckig_duration(states, targets, limits, straight=False):
     request.min_acceleration = [-lim.a_max if lim.a_min is None else lim.a_min for lim in limits]
     if straight:
         request.synchronization = Synchronization.Phase
-    if generator.calculate(request, trajectory) not in (Result.Working, Result.Finished):
-        return None
-    return trajectory.duration
+    started = time.perf_counter()
+    result = generator.calculate(request, trajectory)
+    elapsed = time.perf_counter() - started
+    return (trajectory if result in (Result.Working, Result.Finished) else None), elapsed
+
+
+def ruckig_duration(states, targets, limits, straight=False):
+    """Ruckig's synchronised duration, or None (no ``ruckig``, or an error it reports)."""
+    trajectory, _ = ruckig_move(states, targets, limits, straight)
+    return None if trajectory is None else trajectory.duration

@@ -67,7 +67,7 @@ class Phases:
             s = t - ends[-1]
             a, v, p = self.a[-1], self.v[-1], self.p[-1]
             return p + s * (v + s * a / 2.0), v + s * a, a, 0.0
-        k = _phase_index(ends, t)
+        k = phase_index(ends, t)
         s, j = t - ends[k], self.jerks[k]
         a, v, p = self.a[k], self.v[k], self.p[k]
         return p + s * (v + s * (a / 2.0 + s * j / 6.0)), v + s * (a + s * j / 2.0), a + s * j, j
@@ -85,7 +85,8 @@ class Phases:
         return v_low, v_high, a_low, a_high
 
 
-def _phase_index(ends, t):
+def phase_index(ends, t):
+    """The k with ends[k] <= t < ends[k + 1] (the last phase for t past the end)."""
     low, high = 0, len(ends) - 2
     while low < high:
         middle = (low + high + 1) // 2

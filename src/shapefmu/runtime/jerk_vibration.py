@@ -42,7 +42,7 @@ move that passes the exact checks (limits, end state, the bound over the band).
 
 import math
 
-from .jerk_profiles import Phases
+from .jerk_profiles import Phases, phase_index
 
 # Frequencies per unit of (band width in rad/s) x (move time) at which the band is checked: the
 # phase of S turns by about that product across the band, so 20 points per radian resolve it.
@@ -143,21 +143,10 @@ def convolve_jerk(phases, times, amplitudes):
         for t, A in zip(times, amplitudes):
             local = middle - t
             if 0.0 <= local < edges[-1]:
-                j += A * phases.jerks[_index(edges, local)]
+                j += A * phases.jerks[phase_index(edges, local)]
         durations.append(right - left)
         jerks.append(j)
     return Phases(phases.p[0], phases.v[0], phases.a[0], durations, jerks)
-
-
-def _index(edges, t):
-    low, high = 0, len(edges) - 2
-    while low < high:
-        middle = (low + high + 1) // 2
-        if edges[middle] <= t:
-            low = middle
-        else:
-            high = middle - 1
-    return low
 
 
 # ---------------------------------------------------------------------------------------------
