@@ -5,14 +5,15 @@ Each axis has its time-optimal duration and up to two blocked intervals (``jerk_
 The move lasts the shortest T that every axis can take: the candidates are the axes' t_min and the
 right ends of their blocked intervals, tried in increasing order from the largest t_min on
 (Berscheid & Kroeger, RSS 2021, Sec. IV-C). The axis whose candidate it is keeps its extremal
-profile; every other axis gets a profile of exactly T (``jerk_profiles.profile_of_duration``).
+profile; every other axis gets a profile of exactly T (``jerk_duration.profile_of_duration``).
 
 The straight-line option moves the axes along the line of their displacement: when the initial and
 target velocities and accelerations are multiples of the displacement too, one path coordinate s
 with limits min over the axes of limit_i / |d_i| moves from 0 to 1 and every axis follows d_i s.
 """
 
-from .jerk_profiles import Limits, Phases, Problem, block, profile_of_duration
+from .jerk_duration import profile_of_duration
+from .jerk_profiles import Limits, Phases, Problem, block
 
 
 class AxisMove:
