@@ -10,7 +10,7 @@ Targets (issue 36):
 4. the C planner's median time per 3-axis plan with 2 modes at most 10x Ruckig's median time for the
    rigid 3-axis plan on the same problems (Ruckig called from Python, as measured in the issue).
 
-The planner runs as its C twin (fmi/native/c/jerk_planner.c, equal to the Python kernel: tests/
+The planner runs as its C twin (fmi/native/c/jerk_*.c, equal to the Python kernel: tests/
 test_motion_native.py). "Ruckig followed by a shaper" is the ceiling the planner computes: the rigid
 move (Ruckig's duration, checked here) with its jerk convolved with the shortest catalog shaper.
 Usage: python benchmarks/motion.py [--problems N] [--optima N]

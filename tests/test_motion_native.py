@@ -1,4 +1,4 @@
-"""The C twin of the planner (fmi/native/c/jerk_planner.c) plans what the Python kernel plans, and
+"""The C twin of the planner (fmi/native/c/jerk_*.c) plans what the Python kernel plans, and
 on 10,000 random starts and mid-move re-plans its moves end exactly in the target within the limits.
 
 References: the Python kernel (runtime.jerk_planner) for the twin; Ruckig for the rigid durations;

@@ -1,4 +1,4 @@
-"""The C twin of the motion planner (``c/jerk_planner.c``) compiled as a shared library and called
+"""The C twin of the motion planner (``c/jerk_*.c``, interface ``c/jerk_planner.h``) compiled as a shared library and called
 through ctypes: what the tests compare with the Python kernel (``runtime.jerk_planner``) and what the
 benchmark times beside Ruckig. The FMU that will carry it waits for the FMU kinds of issue 33.
 
@@ -20,7 +20,7 @@ from shapefmu.fmi.compiler import run_compiler
 from shapefmu.runtime.jerk_planner import MAX_CEILING_SHAPERS, PlannedMove, catalog_shapers
 from shapefmu.runtime.jerk_profiles import Phases
 
-SOURCE = Path(__file__).parent / "c" / "jerk_planner.c"
+SOURCES = [Path(__file__).parent / "c" / f"jerk_{part}.c" for part in ("axis", "sync", "vibration", "planner")]
 MAX_AXES, MAX_MODES, MAX_PHASES, MAX_IMPULSES, MAX_SHAPERS = 8, 4, 256, 64, MAX_CEILING_SHAPERS
 METHODS = ("rigid", "cancel", "shaped")
 
@@ -66,9 +66,9 @@ def library() -> ctypes.CDLL:
     folder = Path(tempfile.mkdtemp(prefix="shapefmu-jerk-planner-"))
     target = folder / "libjerk_planner.so"
     done = run_compiler(["gcc", "-O2", "-std=c99", "-Wall", "-Wextra", "-Werror", "-shared", "-fPIC", "-o", str(target),
-                         str(SOURCE), "-lm"])
+                         *map(str, SOURCES), "-lm"])
     if done.returncode != 0:
-        raise RuntimeError(f"compiling {SOURCE.name} failed: {done.stderr}")
+        raise RuntimeError(f"compiling the C planner failed: {done.stderr}")
     lib = ctypes.CDLL(str(target))
     lib.jp_plan.argtypes = [ctypes.POINTER(_Request), ctypes.POINTER(_Result)]
     lib.jp_plan.restype = ctypes.c_int

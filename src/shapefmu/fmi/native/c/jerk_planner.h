@@ -1,6 +1,7 @@
-/* The online jerk-limited multi-axis planner with vibration bounds in C (jerk_planner.c): the twin of
- * runtime/jerk_profiles.py, jerk_sync.py, jerk_vibration.py and jerk_planner.py, operation for
- * operation, so that a native FMU plans what the Python kernel plans (to rounding).
+/* The online jerk-limited multi-axis planner with vibration bounds in C (jerk_axis.c, jerk_sync.c,
+ * jerk_vibration.c, jerk_planner.c; their shared internals in jerk_internal.h): the twin of
+ * runtime/jerk_profiles.py, jerk_duration.py, jerk_sync.py, jerk_vibration.py and jerk_planner.py,
+ * operation for operation, so that a native FMU plans what the Python kernel plans (to rounding).
  *
  * What differs from the Python kernel: the ceiling's shapers (the catalog shapers of every axis that
  * meet its band and vtol, which depend only on its modes) are designed once by the caller and passed
