@@ -13,9 +13,12 @@ Definitions (``runtime.jerk_vibration`` derives them):
   target: the worst case over the band of each, never a ratio per frequency (the rigid move can
   leave no vibration at some frequency of the band, and a ratio there would be 0 / 0);
 - "Ruckig followed by a shaper" (the ceiling) convolves the rigid move's jerk with the shortest
-  catalog shaper whose own residual is within vtol over the band; from a moving start the shaper
-  filters the jerk, so the shaped move starts in the same state, and the rigid target is moved
-  (a fixed point) so that the shaped move ends in the target.
+  catalog shaper (its own residual within vtol over the band) with which the shaped move meets the
+  limits and the bound; from a moving start the shaper filters the jerk, so the shaped move starts
+  in the same state, and the rigid target is moved (a fixed point) so that the shaped move ends in
+  the target. From a moving start it can fail the limits (the shaper keeps part of the initial
+  acceleration on for its length) or the bound (its rigid move is not the reference one): the
+  ceiling is then infinite, and the planner's move is checked against the bound all the same.
 """
 
 from __future__ import annotations

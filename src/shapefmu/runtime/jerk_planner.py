@@ -5,8 +5,10 @@
 1. the rigid move: time-optimal, axes synchronised (``jerk_sync``), the same duration as Ruckig's;
 2. the reference: for every mode of every axis, the worst residual amplitude of the rigid move over
    the band (``jerk_vibration``); the bound is vtol times it;
-3. the ceiling: the rigid move followed by the shortest shaper of the catalog (``shaper_designs``)
-   whose residual is within vtol over every band of the axis (``shaped_move``);
+3. the ceiling ("Ruckig followed by the shortest shaper meeting the band and bound"): the rigid move
+   followed, per axis, by the shortest catalog shaper (``shaper_designs``; its own residual within
+   vtol over the band) with which the shaped move holds the limits and every mode's bound
+   (``shaped_move``);
 4. the planner's move: from the rigid duration upwards, the first duration T at which every axis
    with modes has phases that cancel its modes (``jerk_vibration.cancel``), each checked exactly
    (end state, limits analytically between phase ends, the bound over the band); then the gap to the

@@ -33,11 +33,12 @@ followed by a shaper" means from a moving start: the shaper filters the jerk, so
 leaves from the same position, velocity and acceleration with the jerk and acceleration within the
 rigid move's; the rigid target is corrected, by a fixed point, so that the shaped move ends in the
 target). ``cancel`` is the planner's own: it keeps the phases of the rigid move, inserts in its
-longest hold a jerk doublet (-J, +J) per frequency to cancel, and solves the phase durations for a
-duration T: final acceleration, velocity, position, the sum of durations, and S = 0 at every design
-frequency (the band's centre, and its two ends when delta > 0), by Gauss-Newton steps of least norm
-from the rigid phases. The planner tries increasing T from the rigid duration and keeps the first
-move that passes the exact checks (limits, end state, the bound over the band).
+longest holds jerk doublets (-J, +J) (one per frequency to cancel, two for a band), and solves the
+phase durations for a duration T: final acceleration, velocity, position, the sum of durations, the
+holds the rigid move had on a limit kept there, and S = 0 at every design frequency (the mode's; for
+a band its centre and 0.75 delta either side), by Gauss-Newton steps of least norm from the rigid
+phases. The planner tries increasing T from the rigid duration and keeps the first move that passes
+the exact checks (limits, end state, the bound over the band).
 """
 
 import math
