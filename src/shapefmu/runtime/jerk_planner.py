@@ -207,6 +207,7 @@ def _cancelled(state, target, lim, T, axis_modes, rigid, bounds, ringing, double
         if worst is None:
             return phases
         frequencies.append(worst[1:])
+        pins = []  # another frequency inserts another doublet: the phases the pins named move
     return None
 
 

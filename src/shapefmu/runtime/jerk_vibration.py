@@ -154,13 +154,19 @@ def convolve_jerk(phases, times, amplitudes):
 # The planner's own: cancel S at the design frequencies by solving the phase durations
 
 
-def _with_doublets(phases, count, j_max, tau):
+def _with_doublets(phases, count, limits, tau):
     """The phases with ``count`` jerk doublets (-s J, +s J) of ramps ``tau`` inserted in the
-    longest holds (a hold at positive acceleration, or a positive cruise, dips down: s = +1)."""
+    longest holds (a hold at positive acceleration, or a positive cruise, dips down: s = +1). A
+    cruise on a velocity limit is the last choice: a dip there loses distance it cannot make up."""
+    j_max = limits.j_max
     durations, jerks = list(phases.durations), list(phases.jerks)
     accelerations, velocities = list(phases.a), list(phases.v)
+    v_tol = 1e-9 * max(limits.v_max, -limits.v_min)
     for _ in range(count):
-        holds = [k for k, j in enumerate(jerks) if j == 0.0]
+        holds = [k for k, j in enumerate(jerks) if j == 0.0
+                 and not (abs(accelerations[k]) <= 1e-9 * limits.a_max
+                          and min(abs(velocities[k] - limits.v_max), abs(velocities[k] - limits.v_min)) <= v_tol)]
+        holds = holds or [k for k, j in enumerate(jerks) if j == 0.0]
         if holds:
             k = max(holds, key=lambda i: durations[i])
         else:  # no hold: insert one of zero length where the longest phase ends
@@ -277,7 +283,7 @@ def cancel(start, target, limits, T, modes, rigid, ringing=None, frequencies=Non
         # One doublet per frequency cancels a single one; zeros spread over a band need more
         # freedom than they have equations (two doublets each), or Gauss-Newton finds no root.
         count = len(frequencies) * (1 if all(mode.delta == 0.0 for mode in modes) else 2)
-        durations, jerks = _with_doublets(padded(rigid, T), count, j_max, tau)
+        durations, jerks = _with_doublets(padded(rigid, T), count, limits, tau)
     else:
         durations, jerks = list(rigid.durations), list(rigid.jerks)
     held = _held_limits(durations, jerks, start, limits) + list(pins)

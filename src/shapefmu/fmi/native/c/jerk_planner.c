@@ -188,6 +188,7 @@ static int cancelled(Planner *pl, int axis, double T, const Ph *rigid, const dou
         if (!found) return 1;
         if (freqs >= MAX_FREQ) return 0;
         omegas[freqs] = worst_omega; zetas[freqs++] = worst_zeta;
+        n_pins = 0;  /* another frequency inserts another doublet: the phases the pins named move */
     }
     return 0;
 }

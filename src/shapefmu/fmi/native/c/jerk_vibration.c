@@ -138,7 +138,9 @@ int jpi_convolve_jerk(const Ph *ph, const JpShaper *shaper, Ph *out) {
 }
 
 /* _with_doublets: the durations and jerks with count doublets */
-static int with_doublets(const Ph *ph, int count, double j_max, double tau, double *d, double *j, int *n_out) {
+static int with_doublets(const Ph *ph, int count, const JpLimits *lim, double tau, double *d, double *j, int *n_out) {
+    double j_max = lim->j_max;
+    double v_tol = 1e-9 * max2(lim->v_max, -lim->v_min);
     int n = ph->n;
     double acc[MAXP + 1], vel[MAXP + 1];
     memcpy(d, ph->d, sizeof(double) * (size_t)n);
@@ -148,7 +150,13 @@ static int with_doublets(const Ph *ph, int count, double j_max, double tau, doub
     for (int c = 0; c < count; c++) {
         if (n + 4 > MAXP) return -1;
         int k = -1;
-        for (int i = 0; i < n; i++) if (j[i] == 0.0 && (k < 0 || d[i] > d[k])) k = i;
+        for (int i = 0; i < n; i++) {
+            int on_limit = fabs(acc[i]) <= 1e-9 * lim->a_max
+                           && min2(fabs(vel[i] - lim->v_max), fabs(vel[i] - lim->v_min)) <= v_tol;
+            if (j[i] == 0.0 && !on_limit && (k < 0 || d[i] > d[k])) k = i;
+        }
+        if (k < 0)
+            for (int i = 0; i < n; i++) if (j[i] == 0.0 && (k < 0 || d[i] > d[k])) k = i;
         if (k < 0) {
             int longest = 0;
             for (int i = 1; i < n; i++) if (d[i] > d[longest]) longest = i;
@@ -348,7 +356,7 @@ int jpi_cancel(const double *start, const double *target, const JpLimits *lim, d
         for (int q = 0; q < n_modes; q++) if (modes[q].delta != 0.0) all_zero = 0;
         int count = freqs * (all_zero ? 1 : 2);
         Ph pad;
-        if (jpi_padded(rigid, T, &pad) != 0 || with_doublets(&pad, count, j_max, tau, x, jerks, &n) != 0) return 0;
+        if (jpi_padded(rigid, T, &pad) != 0 || with_doublets(&pad, count, lim, tau, x, jerks, &n) != 0) return 0;
     } else {
         n = rigid->n;
         memcpy(x, rigid->d, sizeof(double) * (size_t)n);
