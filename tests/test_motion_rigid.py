@@ -35,8 +35,7 @@ def test_the_axes_end_together_in_their_targets_within_their_limits():
         states, targets, limits = random_problem(rng)
         T, moves = synchronise(states, targets, limits)
         assert T == pytest.approx(ruckig_trajectory(states, targets, limits).duration, rel=1e-9)
-        for move, target, lim in zip(moves, targets, limits):
-            phases = move.phases
+        for phases, target, lim in zip(moves, targets, limits):
             assert phases.duration == pytest.approx(T, rel=1e-12)
             assert phases.end() == pytest.approx(target, rel=1e-9, abs=1e-9)
             _assert_within(phases, lim)
@@ -83,7 +82,7 @@ def test_a_straight_line_move_stays_on_the_line():
     targets = [(0.3, 0.0, 0.0), (0.4, 0.0, 0.0), (-0.15, 0.0, 0.0)]
     T, moves = straight_line(states, targets, [lim, Limits(0.3, 2.0, 20.0), lim])
     for k in range(101):
-        s = [m.phases.state(k * T / 100)[0] for m in moves]
+        s = [phases.state(k * T / 100)[0] for phases in moves]
         fraction = (s[0] - 0.0) / 0.3
         assert s[1] == pytest.approx(1.0 - 0.6 * fraction, abs=1e-12)
         assert s[2] == pytest.approx(-0.15 * fraction, abs=1e-12)

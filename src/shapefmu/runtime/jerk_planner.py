@@ -65,11 +65,7 @@ class PlannedMove:
 
 
 def _rigid(states, targets, limits, straight):
-    if straight:
-        T, moves = straight_line(states, targets, limits)
-    else:
-        T, moves = synchronise(states, targets, limits)
-    return T, [m.phases for m in moves]
+    return (straight_line if straight else synchronise)(states, targets, limits)
 
 
 def _shaper_residual(times, amplitudes, omega, zeta):

@@ -16,16 +16,6 @@ from .jerk_duration import profile_of_duration
 from .jerk_profiles import Limits, Phases, Problem, block
 
 
-class AxisMove:
-    """The phases one axis follows over the synchronised duration."""
-
-    __slots__ = ("phases", "extremal")
-
-    def __init__(self, phases, extremal):
-        self.phases = phases
-        self.extremal = extremal  # True for the axis that sets the duration
-
-
 def _state_problem(state, target, limits):
     (p0, v0, a0), (pf, vf, af) = state, target
     return Problem(p0, v0, a0, pf, vf, af, limits)
@@ -85,19 +75,19 @@ def candidate_durations(blocks):
 
 
 def synchronise(states, targets, limits):
-    """(T, [AxisMove]) of the time-synchronised move of every axis from ``states`` (p, v, a) to
+    """(T, [Phases]) of the time-synchronised move of every axis from ``states`` (p, v, a) to
     ``targets`` (p, v, a) within ``limits`` (``Limits`` per axis)."""
     problems, blocks = rigid_blocks(states, targets, limits)
     for T, owner in candidate_durations(blocks):
         phases = profiles_lasting(problems, blocks, T, owner)
         if phases is not None:
-            return T, [AxisMove(p, axis == owner) for axis, p in enumerate(phases)]
+            return T, phases
     raise ValueError("unreachable target: no common duration found in which every axis reaches its target "
                      "within its limits")
 
 
 def straight_line(states, targets, limits):
-    """(T, [AxisMove]) of the move along the straight line between the positions (see the module
+    """(T, [Phases]) of the move along the straight line between the positions (see the module
     docstring); ValueError if the velocities and accelerations are not along that line."""
     d = [t[0] - s[0] for s, t in zip(states, targets)]
     length = max(abs(x) for x in d)
@@ -133,11 +123,7 @@ def straight_line(states, targets, limits):
     end = (length, path_target[0], path_target[1])
     start = check_start_within(start, path_limits, "path")
     T, (path,) = synchronise([start], [end], [path_limits])
-    moves = []
-    for s, x in zip(states, direction):
-        durations = path.phases.durations
-        moves.append(AxisMove(Phases(s[0], s[1], s[2], durations, [j * x for j in path.phases.jerks]), True))
-    return T, moves
+    return T, [Phases(s[0], s[1], s[2], path.durations, [j * x for j in path.jerks]) for s, x in zip(states, direction)]
 
 
 def _along(values, direction):
