@@ -151,3 +151,14 @@ def test_bad_input_gets_a_one_line_message(kwargs, message):
     with pytest.raises(ValueError, match=message) as error:
         plan(kwargs.pop("state"), kwargs.pop("target"), kwargs.pop("limits"), **kwargs)
     assert "\n" not in str(error.value)
+
+
+def test_a_snapped_move_lasts_a_whole_number_of_periods():
+    ts = 1e-3
+    move = plan([0.0], [0.01], [AxisLimits(0.3, 5.0, 2000.0)], [(40.0, 0.05)], ts=ts)
+    assert move.duration / ts == pytest.approx(round(move.duration / ts), abs=1e-9)
+    assert move.rigid_duration == pytest.approx(0.092, abs=1e-12)  # Ruckig's 91.98 ms, snapped up
+    (start, durations, jerks), = move.phases
+    assert mode_amplitude(start, durations, jerks, 40.0, 0.05, 0.0) <= 0.01 * move.residuals[0].rigid_amplitude
+    final = move.state(move.duration)["axis0"][:3]
+    assert final == pytest.approx((0.01, 0.0, 0.0), abs=1e-12)
