@@ -7,7 +7,9 @@ and returns results as objects with named fields:
 - ``estimate_mode(y, fs, omega0)``: one recorded signal in, a ``ModeEstimate`` out;
 - ``ModeEstimator``: the same estimator fed one sample at a time;
 - ``EKFTunedShaper``: watches a vibration signal and shapes commands with a shaper designed for the
-  converged estimate (runtime kernel ``shapefmu.runtime.ekf_tuner``).
+  converged estimate (runtime kernel ``shapefmu.runtime.ekf_tuner``);
+- ``TrackedShaper``: keeps a shaper on a mode that moves (a bed gaining mass), the EKF watching the
+  plant ring after the machine's own moves, re-designed without a jump (``runtime.tracked_shaper``).
 
 Damping from the estimate: the EKF tracks the damped frequency omega_d and the decay rate sigma of
 eq. (20); for a mode e^{-zeta omega_n t} sin(omega_d t), sigma = zeta omega_n and
@@ -28,12 +30,14 @@ from shapefmu.analysis import log_decrement_damping
 from shapefmu.runtime.checks import check_count, check_finite, check_positive
 from shapefmu.runtime.ekf import ResonanceEKF
 from shapefmu.runtime.ekf_tuner import KINDS, EKFTunedShaperKernel
+from shapefmu.runtime.tracked_shaper import TrackedShaperKernel, tracking_tuning
 from shapefmu.shapers import ImpulseShaper
 
 __all__ = [
     "EKFTunedShaper",
     "ModeEstimate",
     "ModeEstimator",
+    "TrackedShaper",
     "estimate_mode",
     "log_decrement_zeta",
 ]
@@ -314,3 +318,58 @@ class EKFTunedShaper:
         """The EKF's current estimate (no history)."""
         e = self.kernel.ekf
         return ModeEstimate(e.omega_d, e.sigma, e.omega_n, e.zeta, np.empty((0, 2)), e.converged, e.missing, e.resets)
+
+
+@dataclass(frozen=True)
+class TrackedShaper:
+    """A shaper of ``kind`` kept on a mode that moves by the EKF of paper 001, no calibration run:
+    the EKF watches the plant ring freely between changes of the machine's own shaped commands (about
+    the equilibrium ``gain`` times the command; without a gain, only at ``rest``), and the shaper is
+    re-designed for its last good estimate without a jump in the shaped command.
+
+    ``fs`` sampling frequency (Hz); ``omega0`` (rad/s) and ``zeta0`` the guess the shaper starts
+    with; ``noise`` the standard deviation of the measurement and ``amplitude`` the scale of the rings
+    it will show (the measurement's unit); ``drift`` the relative frequency change per square root of a
+    period the EKF is ready to follow (``runtime.tracked_shaper.tracking_tuning``). An estimate is taken
+    when the EKF's standard deviation of omega is below ``omega_tol`` times omega (of sigma, below
+    ``sigma_tol`` times omega) and steady over a period, and omega lies in ``band`` times ``omega0``.
+    The per-sample kernel, what a tracked-shaper FMU will run, is ``kernel()``; the derivation of the
+    watching and the convergence test is in ``shapefmu.runtime.tracked_shaper``.
+
+    >>> import math
+    >>> tracker = TrackedShaper(fs=2000.0, omega0=2 * math.pi * 27.0, noise=0.05, amplitude=2.0, zeta0=0.05)
+    >>> kernel = tracker.kernel()
+    >>> [round(x, 3) for x in kernel.mode]   # the design point starts at the guess
+    [169.646, 0.05]
+    >>> round(kernel.step(1.0, 0.0), 4), kernel.watching   # the plant rested before this sample
+    (0.5392, True)
+    >>> round(kernel.step(1.0, 0.0), 4), kernel.watching   # a move has begun: the EKF looks away
+    (0.5392, False)
+    """
+
+    fs: float
+    omega0: float
+    noise: float
+    amplitude: float
+    zeta0: float = 0.0
+    kind: str = "zv"
+    n: int = 1
+    vtol: float = 0.05
+    drift: float = 1e-3
+    gain: float | None = None
+    rest: float = 0.0
+    band: tuple[float, float] = (0.5, 2.0)
+    zeta_max: float = 0.5
+    omega_tol: float = 1e-2
+    sigma_tol: float = 4e-3
+    resolution: float = 1e-3
+
+    def __post_init__(self):
+        self.kernel()  # the kernel checks every field
+
+    def kernel(self, u0: float = 0.0) -> TrackedShaperKernel:
+        """The per-sample kernel, the command resting at ``u0`` before the first sample."""
+        p0, q, r = tracking_tuning(self.fs, self.omega0, self.amplitude, self.noise, self.drift)
+        return TrackedShaperKernel(self.fs, self.omega0, self.zeta0, self.kind, self.n, self.vtol, self.gain, self.rest,
+                                   u0, tuple(self.band), self.zeta_max, self.resolution, p0=p0, q=q, r=r,
+                                   omega_tol=self.omega_tol, sigma_tol=self.sigma_tol)

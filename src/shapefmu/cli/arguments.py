@@ -1,6 +1,7 @@
 """Argument parsers shared by the command modules (modes in Hz, design and sampling options).
 
-Imported by the command modules of this package, never the other way.
+Imported by the command modules of this package, never the other way. It imports only the standard
+library at the top: ``shapefmu --help`` loads it.
 """
 
 from __future__ import annotations
@@ -9,8 +10,6 @@ import argparse
 import math
 import os
 from pathlib import Path
-
-from shapefmu.shapers import KINDS
 
 
 def parse_mode(text: str) -> tuple[float, float]:
@@ -28,8 +27,16 @@ def parse_mode(text: str) -> tuple[float, float]:
     return 2.0 * math.pi * hz, zeta
 
 
-def add_design_arguments(parser: argparse.ArgumentParser, kinds=KINDS) -> None:
-    """KIND, --mode (repeatable), --vtol and --n: what an impulse-shaper design takes."""
+def examples(*lines: str) -> str:
+    """An ``epilog`` of example command lines (each may end in ``#  what it does``)."""
+    return "example" + ("s" if len(lines) > 1 else "") + ":\n" + "\n".join(f"  {line}" for line in lines)
+
+
+def add_design_arguments(parser: argparse.ArgumentParser, kinds=None) -> None:
+    """KIND, --mode (repeatable), --vtol and --n: what an impulse-shaper design takes (``kinds``:
+    the choices of KIND, default every impulse-shaper design)."""
+    if kinds is None:
+        from shapefmu.shapers import KINDS as kinds
     parser.add_argument("kind", choices=kinds, help="shaper design")
     parser.add_argument(
         "--mode", type=parse_mode, action="append", required=True, metavar="HZ[:ZETA]",
@@ -99,3 +106,40 @@ def _plot_suffixes() -> set[str]:
     from matplotlib.backend_bases import FigureCanvasBase
 
     return {f".{kind}" for kind in FigureCanvasBase.get_supported_filetypes()}
+
+
+def read_system(name_or_path):
+    """The SSP system file given, or the shipped example system of that name, which takes its FMUs
+    from ./fmus (where ``shapefmu build`` writes them)."""
+    from shapefmu.fmi.ssp import read_ssp
+    from shapefmu.plants.shipped import SYSTEM_SUFFIXES, find
+
+    path = find(name_or_path, SYSTEM_SUFFIXES, "SSP system")
+    if path == Path(name_or_path):
+        return read_ssp(path)
+    try:
+        return read_ssp(path, fmu_folder="fmus")
+    except ValueError as error:
+        raise ValueError(f"{error}; the shipped system {name_or_path!r} runs the FMUs of ./fmus: "
+                         f"run `shapefmu build` here first") from None
+
+
+def add_experiment_arguments(parser: argparse.ArgumentParser) -> None:
+    """--stop and --step of a run, both defaulting to what the system file says."""
+    parser.add_argument("--stop", "--stop-time", dest="stop", type=float, metavar="S",
+                        help="stop time in s (default: the system's DefaultExperiment stopTime)")
+    parser.add_argument("--step", type=float, metavar="S", help="macro (communication) step in s (default: the "
+                        "step the system file was written for, OSP baseStepSize or OMSimulator stepSize)")
+
+
+def experiment(system, args) -> tuple[float, float]:
+    """(stop time, step) of a run: ``--stop`` and ``--step``, else the system's own."""
+    from shapefmu.fmi.ssp_targets import written_step
+
+    stop = args.stop if args.stop is not None else system.stop_time
+    step = args.step if args.step is not None else written_step(system)
+    missing = [option for option, value in (("--stop", stop), ("--step", step)) if value is None]
+    if missing:
+        raise ValueError(f"give {' and '.join(missing)}: the system {system.name!r} does not say "
+                         f"({'no DefaultExperiment stopTime' if stop is None else 'no macro step in its annotations'})")
+    return stop, step

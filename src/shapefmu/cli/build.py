@@ -21,10 +21,8 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from shapefmu.cli.arguments import output_file, output_folder, parse_mode
-from shapefmu.fmi.python.builder import build_all, build_fmu
-from shapefmu.fmi.python.slaves.shaper import KINDS, MAX_MODES
-from shapefmu.shapers.catalog import check_sampling
+from shapefmu.cli.arguments import examples, output_file, output_folder, parse_mode
+from shapefmu.cli.progress import reporter
 
 
 def _add_all(parser):
@@ -39,12 +37,42 @@ def _add_all(parser):
 def _build_all(args):
     from shapefmu.fmi.native import build_all as build_all_plants
 
-    version = _fmi_version(args)
+    version, progress = _fmi_version(args), reporter(args, "build")
     if args.native:
         from shapefmu.fmi.native.twins import build_all_native
 
-        return [*build_all_native(args.out, version), *build_all_plants(args.models, args.out, fmi_version=version)]
-    return [*build_all(args.out), *build_all_plants(args.models, args.out)]
+        slaves = build_all_native(args.out, version, progress=progress)
+    else:
+        from shapefmu.fmi.python.builder import build_all
+
+        slaves = build_all(args.out, progress=progress)
+    plants = build_all_plants(args.models, args.out, fmi_version=version, progress=progress)
+    measured = _measured_plants(args.out, version, progress) if args.models is None else []
+    return [*slaves, *plants, *measured]
+
+
+def _measured_plants(out, fmi_version, progress) -> list[Path]:
+    """The plant FMUs with the rigid-body velocity as an output that a shipped system runs (the
+    plant of ``disk_drive_stos``, DiskDriveMeasured.fmu, which its STOS controller measures), built
+    from the shipped model of that plant: ``shapefmu simulate NAME`` then works after ``build``."""
+    from xml.etree import ElementTree as ET
+
+    from shapefmu.cosim.compare import measured_plant
+    from shapefmu.fmi.native import build_plant_fmu, fmu_file_name
+    from shapefmu.plants import as_plant
+    from shapefmu.plants.shipped import SYSTEM_SUFFIXES, shipped
+
+    used = {Path(element.get("source", "")).name for system in shipped(SYSTEM_SUFFIXES)
+            for element in ET.parse(system).getroot().iter() if element.tag.endswith("}Component")}
+    built = []
+    for path in shipped((".toml",)):  # the linear models; a .py model is no Plant of eq. (1)'s form
+        plant = as_plant(path)
+        name = fmu_file_name(f"{plant.name}_measured")  # the name measured_plant gives its model
+        if name in used:
+            if progress is not None:
+                progress(f"building {name}, the plant of {path.name} with its velocity measured")
+            built.append(build_plant_fmu(measured_plant(plant), Path(out) / name, fmi_version=fmi_version))
+    return built
 
 
 def _add_fmi_version(parser):
@@ -79,10 +107,14 @@ def _builder(args):
                                                              **starts)
     if args.clock:
         raise ValueError("--clock needs --native --fmi-version 3.0: the pythonfmu FMUs are FMI 2.0 only")
+    from shapefmu.fmi.python.builder import build_fmu
+
     return build_fmu
 
 
 def _add_shaper(parser):
+    from shapefmu.fmi.python.slaves.shaper import KINDS, MAX_MODES
+
     _add_native(parser)
     parser.add_argument("--kind", choices=KINDS, default="zvd", help="shaper design (default zvd)")
     parser.add_argument("--mode", type=parse_mode, action="append", required=True, metavar="HZ[:ZETA]",
@@ -97,6 +129,9 @@ def _add_shaper(parser):
 
 
 def _build_shaper(args):
+    from shapefmu.fmi.python.slaves.shaper import MAX_MODES
+    from shapefmu.shapers.catalog import check_sampling
+
     if len(args.mode) > MAX_MODES:
         raise ValueError(f"--mode may be given at most {MAX_MODES} times, got {len(args.mode)}")
     starts = {"kind": args.kind, "n": args.n, "vtol": args.vtol, "n_modes": len(args.mode)}
@@ -222,28 +257,41 @@ def _parameter_target(name: str, default: str):
 
 
 TARGETS = {
-    "all": ("every FMU with its default parameters", _add_all, _build_all),
-    "shaper": ("the Shaper FMU with a design baked in", _add_shaper, _build_shaper),
-    "reference": ("the ReferencePlayer FMU playing a signal table", _add_reference_native, _build_reference),
-    "shape-filter": ("the ShapeFilter FMU with a sampled design baked in", _add_shape_filter, _build_shape_filter),
+    "all": ("every FMU with its default parameters", _add_all, _build_all,
+            ("shapefmu build all -o fmus", "shapefmu build all --native --fmi-version 3.0 -o fmus3")),
+    "shaper": ("the Shaper FMU with a design baked in", _add_shaper, _build_shaper,
+               ("shapefmu build shaper --kind simultaneous --mode 2000:0.01 --mode 3000:0.01 --ts 1e-6 "
+                "-o fmus/DiskDriveShaper.fmu",)),
+    "reference": ("the ReferencePlayer FMU playing a signal table", _add_reference_native, _build_reference,
+                  ("shapefmu build reference results/solution.json -o fmus/TimeOptimal.fmu",)),
+    "shape-filter": ("the ShapeFilter FMU with a sampled design baked in", _add_shape_filter, _build_shape_filter,
+                     ("shapefmu build shape-filter --kind hanning --mode 10:0.05 --order 2 -o fmus/Hanning.fmu",)),
     "ekf-tuner": ("the EKFTuner FMU (paper 001): estimates the vibration's mode, shapes for it", _add_ekf_tuner,
-                  _build_ekf_tuner),
+                  _build_ekf_tuner, ("shapefmu build ekf-tuner --kind zvd --omega0 62.8 --ts 1e-3 -o fmus/EKFTuner.fmu",)),
     "stos-controller": ("the STOSController FMU (paper 002): shaped time-optimal closed loop",
-                        *_parameter_target("STOSController", "STOSController")),
+                        *_parameter_target("STOSController", "STOSController"),
+                        ("shapefmu build stos-controller --native --param kind=zvd --param f[1]=40 "
+                         "-o fmus/STOSController.fmu",)),
     "profile": ("the ProfileGenerator FMU: twin-pulse, time-frequency or shaped bang-bang moves",
-                *_parameter_target("ProfileGenerator", "ProfileGenerator")),
+                *_parameter_target("ProfileGenerator", "ProfileGenerator"),
+                ("shapefmu build profile --param profile=TP -o fmus/ProfileGenerator.fmu",)),
 }
 
 
 def register(commands) -> None:
     """Register ``build`` and its targets on the main parser's subcommands."""
-    p = commands.add_parser("build", help="build FMUs (default: all of them into fmus/)")
-    _add_all(p)
+    p = commands.add_parser("build", help="build FMUs (default: all of them into fmus/)", arguments=_add_build,
+                            epilog=examples("shapefmu build                 # every FMU into ./fmus",
+                                            "shapefmu build shaper --kind zvd --mode 40:0.05 -o fmus/Shaper40.fmu",
+                                            "shapefmu build TARGET --help   # a target's options"))
     p.set_defaults(run=lambda args: _run(args, "all"))
-    targets = p.add_subparsers(dest="target")
-    for name, (text, add_arguments, _) in TARGETS.items():
-        q = targets.add_parser(name, help=text)
-        add_arguments(q)
+
+
+def _add_build(p) -> None:
+    _add_all(p)
+    targets = p.add_subparsers(dest="target", metavar="TARGET")
+    for name, (text, add_arguments, _, lines) in TARGETS.items():
+        q = targets.add_parser(name, help=text, arguments=add_arguments, epilog=examples(*lines))
         q.set_defaults(run=lambda args, name=name: _run(args, name))
 
 

@@ -6,23 +6,12 @@ from __future__ import annotations
 import json
 import math
 
-import numpy as np
-
-from shapefmu.analysis import insensitivity, residual_vibration, sensitivity
-from shapefmu.cli.arguments import add_design_arguments, add_sampling_arguments, output_file, parse_mode
-from shapefmu.shapers import (
-    KINDS,
-    TWIN_PULSE_PROFILES,
-    WINDOW_FILTERS,
-    design,
-    time_frequency_profile,
-    velocity_profile,
-)
-
-PROFILE_KINDS = (*TWIN_PULSE_PROFILES, "time-frequency", "hanning", "blackman")
+from shapefmu.cli.arguments import add_design_arguments, add_sampling_arguments, examples, output_file, parse_mode
 
 
 def _design(args):
+    from shapefmu.shapers import WINDOW_FILTERS, design
+
     if args.kind not in WINDOW_FILTERS:
         return design(args.kind, args.mode, vtol=args.vtol, n=args.n)
     if len(args.mode) != 1:
@@ -31,12 +20,17 @@ def _design(args):
 
 
 def _window_filter(kind, mode, args):
+    from shapefmu.shapers import WINDOW_FILTERS
+
     omega, zeta = mode
     ts = args.ts if args.ts is not None else math.pi / (100 * omega * math.sqrt(1 - zeta**2))
     return WINDOW_FILTERS[kind](omega, zeta, ts, args.order, adjust_ts=args.adjust_ts or args.ts is None)
 
 
 def _cmd_design(args) -> int:
+    from shapefmu.analysis import residual_vibration
+    from shapefmu.shapers import WINDOW_FILTERS
+
     shaper = _design(args)
     if args.kind in WINDOW_FILTERS and not args.json:
         (w, z), = args.mode
@@ -60,6 +54,10 @@ def _cmd_design(args) -> int:
 
 
 def _cmd_sensitivity(args) -> int:
+    import numpy as np
+
+    from shapefmu.analysis import insensitivity, sensitivity
+
     shaper = _design(args)
     q = np.linspace(0.0, args.q_max, 1201)
     curves = []
@@ -80,6 +78,8 @@ def _cmd_sensitivity(args) -> int:
 
 
 def _cmd_profile(args) -> int:
+    from shapefmu.shapers import TWIN_PULSE_PROFILES, time_frequency_profile, velocity_profile
+
     omega, zeta = args.mode
     if args.kind in TWIN_PULSE_PROFILES:
         extras = {"ts": args.ts}
@@ -113,20 +113,44 @@ def _cmd_profile(args) -> int:
 
 
 def register(commands) -> None:
-    p = commands.add_parser("design", help="design an impulse shaper or window filter and print it")
+    p = commands.add_parser(
+        "design", help="design an impulse shaper or window filter and print it", arguments=_design_arguments,
+        epilog=examples("shapefmu design zvd --mode 2000:0.01 --mode 3000:0.01",
+                        "shapefmu design simultaneous --mode 2000:0.01 --mode 3000:0.01 --json",
+                        "shapefmu design hanning --mode 1:0.2 --order 2"))
+    p.set_defaults(run=_cmd_design)
+
+    p = commands.add_parser(
+        "sensitivity", help="residual vibration against frequency error, and the band where it stays small",
+        arguments=_sensitivity_arguments, epilog=examples("shapefmu sensitivity ei3 --mode 10 --plot results/ei3.png"))
+    p.set_defaults(run=_cmd_sensitivity)
+
+    p = commands.add_parser(
+        "profile", help="rest-to-rest motion profile (twin-pulse, time-frequency, window)",
+        arguments=_profile_arguments,
+        epilog=examples("shapefmu profile M-BC:TZ:TP --mode 0.557 --distance 1.7 --speed 0.7 --delta-omega 0.05"))
+    p.set_defaults(run=_cmd_profile)
+
+
+def _design_arguments(p) -> None:
+    from shapefmu.shapers import KINDS, WINDOW_FILTERS
+
     add_design_arguments(p, kinds=(*KINDS, *WINDOW_FILTERS))
     add_sampling_arguments(p)
     p.add_argument("--json", action="store_true", help="print the design as JSON")
-    p.set_defaults(run=_cmd_design)
 
-    p = commands.add_parser("sensitivity", help="residual vibration against frequency error")
+
+def _sensitivity_arguments(p) -> None:
     add_design_arguments(p)
     p.add_argument("--q-max", type=float, default=2.0, help="largest frequency ratio plotted (default 2)")
     p.add_argument("--plot", metavar="PNG", type=output_file("plot"), help="save the sensitivity curve to this file")
-    p.set_defaults(run=_cmd_sensitivity)
 
-    p = commands.add_parser("profile", help="rest-to-rest motion profile (twin-pulse, time-frequency, window)")
-    p.add_argument("kind", choices=PROFILE_KINDS, help="profile family")
+
+def _profile_arguments(p) -> None:
+    from shapefmu.shapers import TWIN_PULSE_PROFILES
+
+    p.add_argument("kind", choices=(*TWIN_PULSE_PROFILES, "time-frequency", "hanning", "blackman"),
+                   help="profile family")
     p.add_argument("--mode", type=parse_mode, required=True, metavar="HZ[:ZETA]", help="mode to suppress")
     p.add_argument("--distance", type=float, required=True, help="move distance")
     p.add_argument("--speed", type=float, help="desired slew speed (twin-pulse family)")
@@ -137,4 +161,3 @@ def register(commands) -> None:
     p.add_argument("--plot", metavar="PNG", type=output_file("plot"),
                    help="save acceleration, velocity and position to this file")
     p.add_argument("--json", action="store_true", help="print the sampled profile as JSON")
-    p.set_defaults(run=_cmd_profile)

@@ -12,7 +12,8 @@ import math
 import sys
 from pathlib import Path
 
-from shapefmu.cli.arguments import output_file, parse_mode
+from shapefmu.cli.arguments import examples, output_file, parse_mode
+from shapefmu.cli.progress import showing
 
 AXIS_CHOICES = ("x", "y", "z", "xyz")
 # Klipper's defaults (shapefmu.identification.metrics), repeated so that --help imports no SciPy
@@ -120,7 +121,8 @@ def _cmd_recommend(args) -> int:
 
         spectra = [Spectrum("--mode", "model", freq, psd, "the given modes' transmissibility, summed")]
     advice = recommend(spectra, modes, accel=args.accel, scv=args.scv, max_smoothing=args.max_smoothing,
-                       max_vibration=args.max_vibration, ts=args.filter_ts, progress=_progress())
+                       max_vibration=args.max_vibration, ts=args.filter_ts,
+                       progress=_progress() if showing(args) else None)
     if args.json:
         print(json.dumps(advice.to_json(), indent=2))
     else:
@@ -218,14 +220,17 @@ def _add_reading(p) -> None:
 
 
 def register(commands) -> None:
-    p = commands.add_parser("identify", help="find the modes of a machine in a recording (Klipper, RepRapFirmware, CSV)")
+    p = commands.add_parser("identify", help="find the modes of a machine in a recording (Klipper, RepRapFirmware, CSV)",
+                            epilog=examples("shapefmu identify resonances_x.csv --axis x --plot results/modes.png"))
     p.add_argument("recording", nargs="+", help="recording files (format recognised from the content)")
     _add_reading(p)
     p.add_argument("--json", action="store_true", help="print the modes as JSON")
     p.add_argument("--plot", metavar="PNG", type=output_file("plot"), help="save the spectrum with its modes")
     p.set_defaults(run=_cmd_identify)
 
-    p = commands.add_parser("recommend", help="rank every shaper family on a recording and pick one")
+    p = commands.add_parser("recommend", help="rank every shaper family on a recording and pick one",
+                            epilog=examples("shapefmu recommend resonances_x.csv --axis x --build fmus/MachineShaper.fmu",
+                                            "shapefmu recommend --mode 25:0.05 --mode 62:0.08"))
     p.add_argument("recording", nargs="*", help="recording files; several give one pick for the worst of them")
     p.add_argument("--mode", type=parse_mode, action="append", metavar="HZ[:ZETA]", help="a mode, instead of recordings")
     _add_reading(p)

@@ -15,7 +15,7 @@ import json
 import math
 from pathlib import Path
 
-from shapefmu.cli.arguments import output_file
+from shapefmu.cli.arguments import examples, output_file
 
 
 def _axis(text: str):
@@ -108,9 +108,22 @@ def _cmd_plan(args) -> int:
 
 
 def register(commands) -> None:
-    p = commands.add_parser("motion", help="online jerk-limited multi-axis moves with vibration bounds")
-    sub = p.add_subparsers(dest="motion_command", required=True)
-    q = sub.add_parser("plan", help="plan a move; print its duration, computation time and residuals beside Ruckig's")
+    p = commands.add_parser("motion", help="online jerk-limited multi-axis moves with vibration bounds",
+                            arguments=_motion_arguments,
+                            epilog=examples("shapefmu motion plan --axis x:0:0.01:0.3:5:2000 --mode 40:0.05"))
+
+
+def _motion_arguments(p) -> None:
+    sub = p.add_subparsers(dest="motion_command", required=True, metavar="ACTION")
+    q = sub.add_parser("plan", help="plan a move; print its duration, computation time and residuals beside Ruckig's",
+                       arguments=_plan_arguments,
+                       epilog=examples("shapefmu motion plan --axis x:0:0.01:0.3:5:2000 --mode 40:0.05",
+                                       "shapefmu motion plan --axis x:0:0.01:0.3:5:2000 --axis y:0:0.02:0.3:5:2000 "
+                                       "--mode 40:0.05 --band 0.1 --out results/move.csv"))
+    q.set_defaults(run=_cmd_plan)
+
+
+def _plan_arguments(q) -> None:
     q.add_argument("--axis", type=_axis, action="append", required=True, metavar="NAME:FROM:TO:VMAX:AMAX:JMAX",
                    help="an axis moving from rest at FROM to rest at TO within |v| <= VMAX, |a| <= AMAX, |j| <= JMAX; "
                         "repeat per axis")
@@ -126,4 +139,3 @@ def register(commands) -> None:
     q.add_argument("--json", action="store_true", help="print the result as JSON")
     q.add_argument("--out", metavar="CSV", type=output_file(".csv", what="trajectory table"),
                    help="write time and every axis's position, velocity, acceleration, jerk at --ts")
-    q.set_defaults(run=_cmd_plan)

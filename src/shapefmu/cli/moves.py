@@ -3,7 +3,7 @@
 
 from __future__ import annotations
 
-from shapefmu.cli.arguments import output_file
+from shapefmu.cli.arguments import examples, output_file
 
 
 def _cmd_optimal(args) -> int:
@@ -23,8 +23,20 @@ def _cmd_stos(args) -> int:
 
 
 def register(commands) -> None:
-    p = commands.add_parser("optimal", help="time-optimal move beside the rigid and shaped bang-bang moves")
-    p.add_argument("file", help="plant model file, e.g. models/disk_drive.toml")
+    p = commands.add_parser("optimal", help="time-optimal move beside the rigid and shaped bang-bang moves",
+                            arguments=_optimal_arguments,
+                            epilog=examples("shapefmu optimal disk_drive --distance 0.05 --plot results/optimal.png",
+                                            "shapefmu optimal disk_drive --distance 0.05 --json results/solution.json"))
+    p.set_defaults(run=_cmd_optimal)
+    p = commands.add_parser("stos", help="shaped time-optimal closed-loop move (STOS, paper 002), sampled",
+                            arguments=_stos_arguments,
+                            epilog=examples("shapefmu stos disk_drive --distance 0.05 --shaper simultaneous "
+                                            "--plot results/stos.png"))
+    p.set_defaults(run=_cmd_stos)
+
+
+def _optimal_arguments(p) -> None:
+    p.add_argument("file", help="plant model file or shipped name, e.g. disk_drive")
     p.add_argument("--distance", type=float, required=True, help="move distance of the plant's first output")
     p.add_argument("--u-max", type=float, default=None, help="input limit (default: the input's limit in the file)")
     p.add_argument("--plot", metavar="PNG", type=output_file("plot"),
@@ -33,10 +45,10 @@ def register(commands) -> None:
                    help="save the time-optimal solution as JSON (for `shapefmu build reference`)")
     p.add_argument("--csv", metavar="FILE", type=output_file(".csv", what="signal table"),
                    help="save the time-optimal u(t) as a time,value signal table")
-    p.set_defaults(run=_cmd_optimal)
 
-    p = commands.add_parser("stos", help="shaped time-optimal closed-loop move (STOS, paper 002), sampled")
-    p.add_argument("file", help="plant model file in the form of eq. (1), e.g. models/disk_drive.toml")
+
+def _stos_arguments(p) -> None:
+    p.add_argument("file", help="plant model file in the form of eq. (1) of paper 002, or a shipped name (disk_drive)")
     p.add_argument("--distance", type=float, required=True, help="move distance of the rigid body")
     p.add_argument("--shaper", choices=("convolution", "simultaneous", "zvd", "ei"), default="simultaneous",
                    help="multi-mode shaper the law is built from (default simultaneous)")
@@ -45,4 +57,3 @@ def register(commands) -> None:
     p.add_argument("--u-max", type=float, default=None, help="input limit (default: the input's limit in the file)")
     p.add_argument("--plot", metavar="PNG", type=output_file("plot"),
                    help="save u, x_r, x_r', x_f, x_f' against time (like Fig. 6)")
-    p.set_defaults(run=_cmd_stos)

@@ -11,38 +11,30 @@ import signal
 import sys
 from pathlib import Path
 
-import numpy as np
-
-from shapefmu.cli.arguments import output_file, output_folder
+from shapefmu.cli.arguments import (
+    add_experiment_arguments,
+    examples,
+    experiment,
+    output_file,
+    output_folder,
+    read_system,
+)
+from shapefmu.cli.progress import reporter, showing
 from shapefmu.cli.signals import deferred, exit_code, interrupts
 
 
-def _system(name_or_path):
-    """The SSP file given, or the shipped example system of that name, which takes its FMUs from
-    ./fmus (where ``shapefmu build`` writes them)."""
-    from shapefmu.fmi.ssp import read_ssp
-    from shapefmu.plants.shipped import SYSTEM_SUFFIXES, find
-
-    path = find(name_or_path, SYSTEM_SUFFIXES, "SSP system")
-    if path == Path(name_or_path):
-        return read_ssp(path)
-    try:
-        return read_ssp(path, fmu_folder="fmus")
-    except ValueError as error:
-        raise ValueError(f"{error}; the shipped system {name_or_path!r} runs the FMUs of ./fmus: "
-                         f"run `shapefmu build` here first") from None
-
-
-def _write_ssp(system, args, parameters: dict) -> None:
-    """``simulate --write-ssp``: the system with this run's stop time and ``--set`` values, as an
-    .ssp archive (FMUs inside) or an .ssd file (FMUs where they are)."""
+def _write_ssp(system, args, stop: float, step: float, parameters: dict) -> None:
+    """``simulate --write-ssp``: the system with this run's stop time, macro step and ``--set``
+    values, as an .ssp archive (FMUs inside) or an .ssd file (FMUs where they are). Without
+    ``--target`` the step is recorded as OSP's annotation (libcosim's), which other tools ignore, so
+    ``shapefmu simulate FILE`` runs the file again as it was run."""
     if args.write_ssp is None:
         if args.target is not None or args.fold:
             raise ValueError("--target and --fold apply to --write-ssp FILE, which is not given")
         return
     from shapefmu.fmi.ssp import write_system
 
-    path = write_system(system.for_experiment(args.stop, parameters), args.write_ssp, args.target, args.step,
+    path = write_system(system.for_experiment(stop, parameters), args.write_ssp, args.target or "libcosim", step,
                         _fold(args.fold))
     print(f"system written to {path}" + (f" for {args.target}" if args.target else ""))
 
@@ -68,17 +60,18 @@ def _cmd_simulate(args) -> int:
         if not equals:
             raise ValueError(f"--set must be component.variable=VALUE, got {item!r}")
         parameters[name] = value  # typed by the model description: a number, true/false, an item, text, [array]
-    system = _system(args.system)
-    _write_ssp(system, args, parameters)
+    system = read_system(args.system)
+    stop, step = experiment(system, args)
+    _write_ssp(system, args, stop, step, parameters)
     master = None
     with output_lock(args.out) if args.out else contextlib.nullcontext():  # one run writes a file at a time
         with interrupts() as received:
             try:
-                with Master(system, args.step, algorithm=args.algorithm, record=args.record,
+                with Master(system, step, algorithm=args.algorithm, record=args.record,
                             output_interval=args.output_interval, model_exchange=args.model_exchange,
-                            progress=args.progress) as master:
+                            progress=args.progress or showing(args)) as master:
                     try:
-                        results, status, stopped = master.run(args.stop, parameters=parameters), 0, None
+                        results, status, stopped = master.run(stop, parameters=parameters), 0, None
                     except (CosimError, CosimInterrupted) as error:
                         results, status, stopped = error.partial, 1, _failure(error, received)
                         print(f"shapefmu simulate: {stopped}", file=sys.stderr)
@@ -103,6 +96,8 @@ def _cmd_simulate(args) -> int:
 
 def _report(results, args, stopped: str | None) -> None:
     """Print the run's summary, save ``--out`` (marked partial when the run ``stopped`` early) and ``--plot``."""
+    import numpy as np
+
     from shapefmu.cosim import save_results
 
     last = results[-1]
@@ -165,7 +160,8 @@ def _cmd_compare(args) -> int:
         raise ValueError("--target applies to --write-ssp FILE, which is not given")
     comparison = compare(args.file, args.distance, candidates=args.candidate or None, step=args.step, cache=args.fmus,
                          u_max=args.u_max, tolerance=args.tolerance, plot=args.plot, write_ssp=args.write_ssp,
-                         target=args.target, native=args.native, fmi_version=args.fmi_version)
+                         target=args.target, native=args.native, fmi_version=args.fmi_version,
+                         progress=reporter(args, "compare"))
     print(comparison.table())
     if args.plot:
         print(f"plot written to {args.plot}")
@@ -186,14 +182,28 @@ def _add_write_ssp(parser, fold: bool) -> None:
 
 
 def register(commands) -> None:
-    p = commands.add_parser("simulate", help="run an SSP system of FMUs with the co-simulation master")
+    p = commands.add_parser(
+        "simulate", help="run an SSP system of FMUs with the co-simulation master", arguments=_simulate_arguments,
+        epilog=examples("shapefmu simulate disk_drive_shaped            # a shipped system, after `shapefmu build`",
+                        "shapefmu simulate system.ssp --stop 0.01 --step 1e-5 --record plant.position --out r.csv"))
+    p.set_defaults(run=_cmd_simulate)
+    p = commands.add_parser(
+        "compare", help="one plant, every candidate command, co-simulated as FMUs beside the time-optimal move",
+        arguments=_compare_arguments,
+        epilog=examples("shapefmu compare disk_drive --distance 0.05 --plot results/compare_disk_drive.png",
+                        "shapefmu compare disk_drive --distance 0.05 --candidate convolution --native"))
+    p.set_defaults(run=_cmd_compare)
+
+
+def _simulate_arguments(p) -> None:
+    from shapefmu.cosim.master import ALGORITHMS
+
     p.add_argument("system", help="SSP system (.ssp archive or .ssd file), or a shipped one by name (shapefmu plant list)")
-    p.add_argument("--stop", type=float, required=True, help="stop time in s")
-    p.add_argument("--step", type=float, required=True, help="macro (communication) step in s")
+    add_experiment_arguments(p)
     p.add_argument("--record", action="append", metavar="COMP.VAR",
                    help="variable to record, an array as a column per element; repeat (default: every output)")
     p.add_argument("--output-interval", type=float, help="record every this many s (a multiple of --step)")
-    p.add_argument("--algorithm", choices=("gauss-seidel", "jacobi"), default="gauss-seidel", help="master algorithm")
+    p.add_argument("--algorithm", choices=ALGORITHMS, default="gauss-seidel", help="master algorithm")
     p.add_argument("--model-exchange", action="append", metavar="COMP", help="integrate this component as Model Exchange")
     p.add_argument("--set", action="append", default=[], metavar="COMP.VAR=VALUE",
                    help="parameter for this run, typed by the FMU (a number, true/false, an enumeration item, text; "
@@ -201,14 +211,15 @@ def register(commands) -> None:
     p.add_argument("--out", metavar="FILE", type=output_file(".csv", ".parquet", what="results file"),
                    help="save the results as .csv or .parquet (checked before the run)")
     p.add_argument("--plot", metavar="PNG", type=output_file("plot"), help="plot every recorded variable against time")
-    p.add_argument("--progress", action="store_true", help="show a progress bar")
+    p.add_argument("--progress", action="store_true", help="show the progress bar even when stderr is not a terminal")
     _add_write_ssp(p, fold=True)
-    p.set_defaults(run=_cmd_simulate)
 
+
+def _compare_arguments(p) -> None:
     from shapefmu.cosim.compare import CANDIDATES
 
-    p = commands.add_parser("compare", help="one plant, every candidate command, co-simulated as FMUs side by side")
-    p.add_argument("file", help="plant model in the form of eq. (1) of paper 002, e.g. models/disk_drive.toml or disk_drive")
+    p.add_argument("file", help="plant model in the form of eq. (1) of paper 002: a model file or a shipped name "
+                   "(disk_drive)")
     p.add_argument("--distance", type=float, required=True, help="move distance of the rigid body")
     p.add_argument("--candidate", action="append", choices=CANDIDATES, help="candidate to run; repeat (default: all)")
     p.add_argument("--step", type=float, default=1e-6, help="macro step and sampling period of every FMU in s (default 1e-6)")
@@ -224,4 +235,3 @@ def register(commands) -> None:
     p.add_argument("--plot", metavar="PNG", type=output_file("plot"),
                    help="save u, position error and deflection of every candidate")
     _add_write_ssp(p, fold=False)
-    p.set_defaults(run=_cmd_compare)

@@ -7,8 +7,11 @@ It may import ``shapefmu.fmi`` and the layers below (``compare`` uses the design
 ``sweep`` or ``cli``.
 """
 
-from shapefmu.cosim.errors import AlgebraicLoopError, CosimError, CosimInterrupted, Termination
-from shapefmu.cosim.master import ALGORITHMS, Master, simulate
-from shapefmu.cosim.output_files import save_results
+from shapefmu import lazy_exports
 
-__all__ = ["ALGORITHMS", "AlgebraicLoopError", "CosimError", "CosimInterrupted", "Master", "Termination", "save_results", "simulate"]
+# Imported on first use, so that a command writing an output file (``output_files``) loads no fmpy.
+__getattr__, __dir__, __all__ = lazy_exports(__name__, {
+    "shapefmu.cosim.errors": ("AlgebraicLoopError", "CosimError", "CosimInterrupted", "Termination"),
+    "shapefmu.cosim.master": ("ALGORITHMS", "Master", "simulate"),
+    "shapefmu.cosim.output_files": ("save_results",),
+})

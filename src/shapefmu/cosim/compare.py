@@ -314,7 +314,7 @@ def _mode_arrays(modes: dict, fmu) -> dict:
 def compare(plant_model, distance: float, candidates=CANDIDATES, step: float = 1e-6, *, cache="fmus",
             u_max: float | None = None, tolerance: float = 1e-3, stop_time: float | None = None,
             plot=None, write_ssp=None, target: str | None = None, native: bool = False,
-            fmi_version: str = "2.0") -> Comparison:
+            fmi_version: str = "2.0", progress=None) -> Comparison:
     """Run the plant with each candidate command as an SSP system of FMUs; see the module docstring.
 
     ``plant_model``: a model file or Plant of paper 002's eq. (1) form (a rigid body and 1-4 modes).
@@ -329,6 +329,11 @@ def compare(plant_model, distance: float, candidates=CANDIDATES, step: float = 1
     every slave is its native C twin, built with the system's parameters baked in (a twin designs
     at build time). ``fmi_version`` "3.0" (with ``native``): every FMU, plant included, is FMI 3.0,
     and the shaper's mode frequencies and dampings are bound as the array parameters f and zeta.
+    ``progress``: a function of a line of text (or None), told as each phase and candidate begins.
+
+    Every ratio is against the co-simulated time-optimal move, which is run even when it is not
+    among ``candidates`` (then it is not in the table), so a candidate's ratio does not depend on
+    what else was asked for.
     """
     from shapefmu.cosim.master import Master
     from shapefmu.fmi.ssp import System, write_system
@@ -354,9 +359,12 @@ def compare(plant_model, distance: float, candidates=CANDIDATES, step: float = 1
     u_max = check_positive(u_max, "u_max")
     modes = _modes_hz(plant)
     window = 2.0 * math.pi / min(omega for omega, _ in plant.flexible_modes())
+    say = progress or (lambda text: None)
     fmus = FMUCache(cache, native=native, fmi_version=fmi_version)
+    say(f"building or reusing the plant FMU in {cache}")
     plant_fmu = fmus.plant(plant)
     rigid = rigid_bang_bang(plant, distance, u_max)
+    say("solving the time-optimal move (CasADi, then exact switch times)")
     optimal = time_optimal(plant, distance, u_max)
     longest_shaper = max(shaper_for(plant, kind).duration for kind in ("convolution", "simultaneous"))
     if stop_time is None:
@@ -375,7 +383,9 @@ def compare(plant_model, distance: float, candidates=CANDIDATES, step: float = 1
             return master.run(start + stop_time)
 
     runs, written = [], []
-    for name in candidates:
+    to_run = tuple(dict.fromkeys((*candidates, "time-optimal")))  # the ratios' reference always runs
+    for number, name in enumerate(to_run, start=1):
+        say(f"candidate {name} ({number} of {len(to_run)}): building or reusing its FMUs, then running it")
         start, extra = 0.0, ()
         if name in ("bang-bang", "time-optimal"):
             table = _signal_table(rigid if name == "bang-bang" else optimal.command)
@@ -395,7 +405,7 @@ def compare(plant_model, distance: float, candidates=CANDIDATES, step: float = 1
         if native:
             sys_ = _baked_in(sys_, fmus, strings_only=False)
         results = run_system(sys_, start, extra)
-        if write_ssp is not None:
+        if write_ssp is not None and name in candidates:
             path = Path(write_ssp)
             if target == "omsimulator":
                 sys_ = _baked_in(sys_, fmus, strings_only=True)
@@ -421,9 +431,10 @@ def compare(plant_model, distance: float, candidates=CANDIDATES, step: float = 1
         metrics = move_metrics(results["time"][moving], applied[moving], position,
                                [results[o][moving] for o in outputs[1:]], distance, u_max, window, tolerance)
         measured.append((name, metrics, results, start))
-    reference = next((m.move_time for name, m, *_ in measured if name == "time-optimal"), optimal.T)
+    reference = next(m.move_time for name, m, *_ in measured if name == "time-optimal")
     comparison = Comparison(plant.name, distance, u_max, step, optimal.T,
-                            tuple(CandidateRun(name, m, m.move_time / reference, r, s) for name, m, r, s in measured),
+                            tuple(CandidateRun(name, m, m.move_time / reference, r, s) for name, m, r, s in measured
+                                  if name in candidates),
                             command, tuple(written))
     if plot is not None:
         plot_compare(comparison, plot)

@@ -146,3 +146,23 @@ def _annotation(body: str, kind: str = "org.openmodelica", namespace: str = OMS,
         body = f"<oms:Annotations>{body}</oms:Annotations>"
     return ET.fromstring(f'<ssd:Annotations xmlns:ssd="{_SSD}" xmlns:ssc="{_SSC}" xmlns:{prefix}="{namespace}">'
                          f'<ssc:Annotation type="{kind}">{body}</ssc:Annotation></ssd:Annotations>')
+
+
+def written_step(system) -> float | None:
+    """The macro step a system was written for, as ``for_target`` records it (OSP's
+    ``baseStepSize``, OMSimulator's ``stepSize``), read back from its annotations; None when it
+    records none. ``shapefmu simulate`` and ``sweep`` take it when no ``--step`` is given."""
+    for annotations in (*system.experiment_annotations, *system.system_annotations):
+        for element in annotations.iter():
+            text = element.get("baseStepSize", element.get("stepSize"))
+            if text is None:
+                continue
+            try:
+                step = float(text)
+            except ValueError:
+                step = math.nan
+            if not (math.isfinite(step) and step > 0):
+                raise ValueError(f"system {system.name!r}: the macro step in its annotations must be a number > 0 s, "
+                                 f"got {text!r}")
+            return step
+    return None

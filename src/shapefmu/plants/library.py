@@ -203,3 +203,50 @@ def mass_spring_chain(masses: Sequence[float], springs: Sequence[float], dampers
                   "dampers": Parameter(dampers, "N*s/m")}
     return Plant(A, B, C, np.zeros((n, 1)), inputs=("force",), outputs=[f"x_{i}" for i in range(1, n + 1)],
                  states=states, parameters=parameters, name=name, kind="mass_spring_chain")
+
+
+def sprung_masses(masses: Sequence[float], stiffnesses: Sequence[float], dampers: Sequence[float] | None = None,
+                  name: str = "sprung_masses") -> Plant:
+    """Masses on springs (and dampers) carried by a driven carriage: carriage acceleration in.
+
+    A printer's bed on its belt, a toolhead on its frame: the drive imposes the carriage acceleration
+    a, and mass i, joined to the carriage by a spring k_i and a damper c_i, deflects from it by e_i,
+
+        m_i e_i'' + c_i e_i' + k_i e_i = -m_i a,
+
+    so its mode is omega_i = sqrt(k_i / m_i), zeta_i = c_i / (2 sqrt(k_i m_i)) (the belt-driven bed of
+    Marlin #26655: 1 kg at 30 Hz, 1.3 kg at 30 / sqrt(1.3) = 26.3 Hz). The state is
+    [x, v, e_1, e_1', ...]; the outputs are the carriage position, each deflection e_i, then each
+    mass's acceleration a + e_i'' = -(k_i e_i + c_i e_i') / m_i, what an accelerometer on it reads.
+    """
+    masses = tuple(check_positive(m, f"masses[{i}]") for i, m in enumerate(masses))
+    if not masses:
+        raise ValueError("masses must hold at least one mass")
+    n = len(masses)
+    stiffnesses = tuple(check_positive(k, f"stiffnesses[{i}]") for i, k in enumerate(stiffnesses))
+    dampers = (0.0,) * n if dampers is None else tuple(check_finite(c, f"dampers[{i}]") for i, c in enumerate(dampers))
+    if len(stiffnesses) != n or len(dampers) != n:
+        raise ValueError(f"{n} sprung masses need {n} stiffnesses and dampers, got {len(stiffnesses)} and {len(dampers)}")
+    if any(c < 0 for c in dampers):
+        raise ValueError(f"dampers must be >= 0 N*s/m, got {dampers}")
+    A = np.zeros((2 + 2 * n, 2 + 2 * n))
+    B = np.zeros((2 + 2 * n, 1))
+    C = np.zeros((1 + 2 * n, 2 + 2 * n))
+    A[0, 1] = 1.0
+    B[1, 0] = 1.0
+    C[0, 0] = 1.0
+    for i, (m, k, c) in enumerate(zip(masses, stiffnesses, dampers)):
+        e = 2 + 2 * i
+        A[e, e + 1] = 1.0
+        A[e + 1, e] = -k / m
+        A[e + 1, e + 1] = -c / m
+        B[e + 1, 0] = -1.0
+        C[1 + i, e] = 1.0
+        C[1 + n + i, e:e + 2] = (-k / m, -c / m)
+    states = ["x", "v"] + [s for i in range(1, n + 1) for s in (f"e_{i}", f"de_{i}")]
+    outputs = (["carriage_position"] + [f"deflection_{i}" for i in range(1, n + 1)]
+               + [f"acceleration_{i}" for i in range(1, n + 1)])
+    parameters = {"masses": Parameter(masses, "kg"), "stiffnesses": Parameter(stiffnesses, "N/m"),
+                  "dampers": Parameter(dampers, "N*s/m")}
+    return Plant(A, B, C, np.zeros((1 + 2 * n, 1)), inputs=("acceleration",), outputs=outputs, states=states,
+                 parameters=parameters, name=name, kind="sprung_masses")

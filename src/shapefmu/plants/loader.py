@@ -15,12 +15,17 @@ with a value and a unit, its ``inputs`` (unit and optional actuator limit ``max`
     [outputs]
     position = { unit = "rad" }
 
+An optional ``[scheduling]`` table declares an input on which parameters depend (an added mass, a
+rope length): ``load_scheduled`` reads such a file as a ``ScheduledPlant`` (``plants.scheduling``),
+``load`` as the plant at the input's start value.
+
 The plant-FMU generator reads the same files, so nothing here is specific to Python beyond the
 constructors the kinds map to.
 """
 
 from __future__ import annotations
 
+import functools
 import math
 import os
 import re
@@ -32,6 +37,7 @@ import control
 from shapefmu.plants import library, shipped
 from shapefmu.runtime.checks import check_text, parse_nested, read_text_file
 from shapefmu.plants.model import Parameter, Plant
+from shapefmu.plants.scheduling import ScheduledPlant, SchedulingInput
 
 
 @dataclass(frozen=True)
@@ -82,6 +88,11 @@ PARAMETER_SPECS = {
         "springs": ParameterSpec(True, units={"N/m": 1.0}),
         "dampers": ParameterSpec(True, required=False, units={"N*s/m": 1.0}),
     },
+    "sprung_masses": {
+        "masses": ParameterSpec(True, units={"kg": 1.0, "g": 1e-3}),
+        "stiffnesses": ParameterSpec(True, units={"N/m": 1.0}),
+        "dampers": ParameterSpec(True, required=False, units={"N*s/m": 1.0}),
+    },
 }
 KINDS = tuple(PARAMETER_SPECS)
 
@@ -100,6 +111,8 @@ def _build(kind: str, p: dict, name: str, input_name: str, u_max) -> Plant:
         return library.transfer_function(p["num"], p["den"], name=name, input_name=input_name)
     if kind == "pendula":
         return library.pendula(p["lengths"], p.get("g", library.STANDARD_GRAVITY), p.get("zeta", 0.0), name=name)
+    if kind == "sprung_masses":
+        return library.sprung_masses(p["masses"], p["stiffnesses"], p.get("dampers"), name=name)
     return library.mass_spring_chain(p["masses"], p["springs"], p.get("dampers"), name=name)
 
 
@@ -130,8 +143,8 @@ def _identifier(value, where) -> str:
     return value
 
 
-def _parameter(raw, spec: ParameterSpec, where: str):
-    """(converted value for the constructor, Parameter as written in the file)."""
+def _parameter(raw, spec: ParameterSpec, where: str) -> Parameter:
+    """The parameter as written in the file (``_converted`` gives it in the constructor's units)."""
     if not isinstance(raw, dict) or "value" not in raw:
         raise ValueError(f"{where} must be a table {{ value = ..., unit = \"...\" }}, got {raw!r}")
     extra = set(raw) - {"value", "unit", "description"}
@@ -146,15 +159,12 @@ def _parameter(raw, spec: ParameterSpec, where: str):
     if spec.units is not None and unit not in spec.units:
         raise ValueError(f"{where}.unit must be one of {sorted(spec.units)}, got {unit!r}")
     check_text(unit, f"{where}.unit")
-    factor = spec.units[unit] if spec.units is not None else 1.0
     value = raw["value"]
     if spec.array:
         if not isinstance(value, list) or not value:
             raise ValueError(f"{where}.value must be a non-empty list of numbers, got {value!r}")
-        written = tuple(_finite(v, f"{where}.value[{i}]") for i, v in enumerate(value))
-        return tuple(factor * v for v in written), Parameter(written, unit)
-    written = _finite(value, f"{where}.value")
-    return factor * written, Parameter(written, unit)
+        return Parameter(tuple(_finite(v, f"{where}.value[{i}]") for i, v in enumerate(value)), unit)
+    return Parameter(_finite(value, f"{where}.value"), unit)
 
 
 def _signals(data, key, count, source):
@@ -178,13 +188,13 @@ def _signals(data, key, count, source):
     return table
 
 
-def loads(text: str, source: str = "<string>") -> Plant:
-    """Parse a plant model from TOML text; ``source`` names the file in error messages."""
+def _read(text: str, source: str):
+    """(the plant at the scheduling start value, the ScheduledPlant or None) of a model file's text."""
     try:
         data = parse_nested(tomllib.loads, text, source)
     except tomllib.TOMLDecodeError as error:
         raise ValueError(f"{source}: not valid TOML: {error}") from None
-    allowed = {"name", "kind", "description", "source", "parameters", "inputs", "outputs"}
+    allowed = {"name", "kind", "description", "source", "parameters", "inputs", "outputs", "scheduling"}
     extra = set(data) - allowed
     if extra:
         raise ValueError(f"{source}: unknown top-level field(s) {sorted(extra)}; allowed: {sorted(allowed)}")
@@ -206,9 +216,7 @@ def loads(text: str, source: str = "<string>") -> Plant:
     missing = [key for key, spec in specs.items() if spec.required and key not in raw_parameters]
     if missing:
         raise ValueError(f"{source}: missing parameter(s) {missing} for kind {kind!r}")
-    values, written = {}, {}
-    for key, raw in raw_parameters.items():
-        values[key], written[key] = _parameter(raw, specs[key], f"{source}: parameters.{key}")
+    written = {key: _parameter(raw, specs[key], f"{source}: parameters.{key}") for key, raw in raw_parameters.items()}
 
     inputs = _signals(data, "inputs", 1, source)
     input_name = next(iter(inputs))
@@ -217,14 +225,103 @@ def loads(text: str, source: str = "<string>") -> Plant:
         u_max = _finite(u_max, f"{source}: inputs.{input_name}.max")
         if u_max <= 0:
             raise ValueError(f"{source}: inputs.{input_name}.max must be > 0, got {u_max!r}")
+    build = functools.partial(_assemble, kind=kind, name=name, input_name=input_name, u_max=u_max, data=data,
+                              source=source)
+    plant = build(written, where="parameters")
+    if "scheduling" not in data:
+        return plant, None
+    scheduling = _scheduling(data["scheduling"], written, (input_name, *plant.outputs), source)
+    for end in (scheduling.minimum, scheduling.maximum):  # affine laws: valid at both ends is valid between
+        build(scheduling.parameters_at(written, end), where=f"parameters at {scheduling.name} = {end:g}")
+    return plant, ScheduledPlant(plant, scheduling, functools.partial(build, where="parameters"))
+
+
+def _assemble(written: dict, *, kind, name, input_name, u_max, data, source, where) -> Plant:
+    """The plant of ``kind`` with the parameters as ``written`` in the file (converted to the
+    constructor's units), named as the file names its signals."""
+    specs = PARAMETER_SPECS[kind]
+    values = {key: _converted(parameter, specs[key]) for key, parameter in written.items()}
     try:
         plant = _build(kind, values, name, input_name, u_max)
     except ValueError as error:
-        raise ValueError(f"{source}: parameters: {error}") from None
+        raise ValueError(f"{source}: {where}: {error}") from None
     outputs = _signals(data, "outputs", len(plant.outputs), source)
     return Plant(plant.A, plant.B, plant.C, plant.D, inputs=(input_name,), outputs=tuple(outputs),
                  states=plant.states, parameters=written,
                  limits={input_name: u_max} if u_max is not None else {}, name=name, kind=kind)
+
+
+def _converted(parameter: Parameter, spec: ParameterSpec):
+    factor = spec.units[parameter.unit] if spec.units is not None else 1.0
+    if isinstance(parameter.value, tuple):
+        return tuple(factor * v for v in parameter.value)
+    return factor * parameter.value
+
+
+_SCHEDULING_FIELDS = {"name", "unit", "min", "max", "start", "description", "per_unit"}
+
+
+def _scheduling(raw, written: dict, signals, source) -> SchedulingInput:
+    """The [scheduling] table (see ``shapefmu.plants.scheduling``), checked against the parameters."""
+    where = f"{source}: scheduling"
+    if not isinstance(raw, dict):
+        raise ValueError(f"{where} must be a table with fields {sorted(_SCHEDULING_FIELDS)}")
+    extra = set(raw) - _SCHEDULING_FIELDS
+    if extra:
+        raise ValueError(f"{where} has unknown field(s) {sorted(extra)}; allowed: {sorted(_SCHEDULING_FIELDS)}")
+    name = _identifier(raw.get("name"), f"{where}.name")
+    if name in signals:
+        raise ValueError(f"{where}.name {name!r} is already a signal of the plant ({', '.join(signals)})")
+    unit = raw.get("unit")
+    if not isinstance(unit, str) or not unit.strip():
+        raise ValueError(f"{where}.unit is missing: the scheduling input needs a unit")
+    check_text(unit, f"{where}.unit")
+    if "description" in raw:
+        check_text(raw["description"], f"{where}.description")
+    low, high = (_finite(raw.get(key), f"{where}.{key}") for key in ("min", "max"))
+    if not low < high:
+        raise ValueError(f"{where}: min must be < max, got min {low!r} and max {high!r}")
+    start = _finite(raw.get("start", low), f"{where}.start")
+    if not low <= start <= high:
+        raise ValueError(f"{where}.start must be in [min, max] = [{low:g}, {high:g}], got {start!r}")
+    per_unit = raw.get("per_unit")
+    if not isinstance(per_unit, dict) or not per_unit:
+        raise ValueError(f"{where}.per_unit must be a table naming the parameters that depend on {name} "
+                         f"(e.g. per_unit = {{ masses = [1.0] }})")
+    rates = {}
+    for key, rate in per_unit.items():
+        if key not in written:
+            raise ValueError(f"{where}.per_unit.{key}: no such parameter in [parameters]; "
+                             f"parameters: {sorted(written)}")
+        value = written[key].value
+        if isinstance(value, tuple):
+            if not isinstance(rate, list) or len(rate) != len(value):
+                raise ValueError(f"{where}.per_unit.{key} must be a list of {len(value)} numbers, one per entry of "
+                                 f"parameters.{key}, got {_shown(rate)}")
+            rates[key] = tuple(_finite(r, f"{where}.per_unit.{key}[{i}]") for i, r in enumerate(rate))
+        else:
+            rates[key] = _finite(rate, f"{where}.per_unit.{key}")
+    return SchedulingInput(name, unit, low, high, start, rates, raw.get("description", ""))
+
+
+def loads(text: str, source: str = "<string>") -> Plant:
+    """Parse a plant model from TOML text; ``source`` names the file in error messages. A model with a
+    scheduling input is read as the plant at its start value (``loads_scheduled`` for the rest)."""
+    return _read(text, source)[0]
+
+
+def loads_scheduled(text: str, source: str = "<string>") -> ScheduledPlant:
+    """Parse a plant model that declares a [scheduling] table (``shapefmu.plants.scheduling``)."""
+    scheduled = _read(text, source)[1]
+    if scheduled is None:
+        raise ValueError(f"{source}: declares no [scheduling] table: its parameters depend on no input")
+    return scheduled
+
+
+def load_scheduled(path) -> ScheduledPlant:
+    """Read a model file with a scheduling input, or the shipped model of that name (``printer_bed``)."""
+    path = os.fspath(shipped.find(path, (".toml",)))
+    return loads_scheduled(read_text_file(path, "plant model"), source=path)
 
 
 def load(path) -> Plant:
@@ -245,8 +342,14 @@ def as_plant(system) -> Plant:
 
 
 def describe(path_or_plant) -> str:
-    """The text of ``shapefmu plant show FILE``: the plant's signals, parameters and modes."""
-    plant = as_plant(path_or_plant)
+    """The text of ``shapefmu plant show FILE``: the plant's signals, parameters and modes (of a model
+    file with a scheduling input: at its start value, then the input and the lowest mode along it)."""
+    scheduled = None
+    if isinstance(path_or_plant, str) or hasattr(path_or_plant, "__fspath__"):
+        path = os.fspath(shipped.find(path_or_plant, (".toml",)))
+        plant, scheduled = _read(read_text_file(path, "plant model"), path)
+    else:
+        plant = as_plant(path_or_plant)
     lines = [f"plant {plant.name} (kind {plant.kind}), {plant.n_states} states"]
     for signal in plant.inputs:
         limit = plant.limits.get(signal)
@@ -261,4 +364,6 @@ def describe(path_or_plant) -> str:
         zeta = "-" if math.isnan(mode.zeta) else f"{mode.zeta:.4g}"
         lines.append(f"  {mode.hz:12.6g} {mode.omega:14.6g} {zeta:>8} {mode.participation:14.4g}  "
                      f"{mode.pole.real:.6g}{mode.pole.imag:+.6g}j")
+    if scheduled is not None:
+        lines.extend(scheduled.describe())
     return "\n".join(lines)

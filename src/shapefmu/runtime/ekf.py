@@ -241,6 +241,18 @@ class ResonanceEKF:
             self._recent.append((self.x[2], self.x[3]))
         return measured and not self.reset_last
 
+    def restart_phasor(self):
+        """A new ring-down begins: the plant was driven while the filter did not watch, so the
+        amplitude and phase of what it now sees are unknown. The phasor (x1, x2) goes back to 0 with
+        its initial variance and no correlation with omega and sigma, which keep their estimates and
+        variances: what the filter learnt of the mode survives a move, what it knew of the last ring
+        does not."""
+        self.x[0] = self.x[1] = 0.0
+        for i in (0, 1):
+            for j in range(4):
+                self.P[i][j] = self.P[j][i] = 0.0
+            self.P[i][i] = self.p0[i]
+
     def _healthy(self):
         values = self.x + [v for row in self.P for v in row]
         if not all(math.isfinite(v) for v in values):
@@ -282,16 +294,25 @@ class ResonanceEKF:
         return math.sqrt(max(self.P[3][3], 0.0))
 
     @property
+    def omega_converged(self):
+        """Standard deviation of omega below ``omega_tol`` times omega, and omega steady within that
+        over the last window."""
+        return self._steady(2, 0, self.omega_tol)
+
+    @property
+    def sigma_converged(self):
+        """Standard deviation of sigma below ``sigma_tol`` times omega, and sigma steady within that
+        over the last window."""
+        return self._steady(3, 1, self.sigma_tol)
+
+    @property
     def converged(self):
         """Covariance of omega and sigma small and both estimates stable over the last window."""
-        omega = self.x[2]
-        if self.omega_std > self.omega_tol * omega or self.sigma_std > self.sigma_tol * omega:
+        return self.omega_converged and self.sigma_converged
+
+    def _steady(self, state, column, tol):
+        bound = tol * self.x[2]
+        if math.sqrt(max(self.P[state][state], 0.0)) > bound or len(self._recent) < self.window:
             return False
-        if len(self._recent) < self.window:
-            return False
-        omegas = [w for w, _ in self._recent]
-        sigmas = [s for _, s in self._recent]
-        return (
-            max(omegas) - min(omegas) <= self.omega_tol * omega
-            and max(sigmas) - min(sigmas) <= self.sigma_tol * omega
-        )
+        recent = [pair[column] for pair in self._recent]
+        return max(recent) - min(recent) <= bound

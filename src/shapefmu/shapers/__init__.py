@@ -11,6 +11,7 @@ from shapefmu.shapers.impulse import ImpulseShaper, mzv, um_zv, zv, zv_dn, zvd, 
 from shapefmu.shapers.multimode import check_modes, convolve_modes, simultaneous
 from shapefmu.shapers.profile import MotionProfile, velocity_profile
 from shapefmu.shapers.sampled import SampledShaper
+from shapefmu.shapers.scheduled import Schedule, ScheduledShaper
 from shapefmu.shapers.time_frequency import (
     TimeFrequencyProfile,
     energy_leakage,
@@ -51,6 +52,8 @@ __all__ = [
     "ImpulseShaper",
     "MotionProfile",
     "SampledShaper",
+    "Schedule",
+    "ScheduledShaper",
     "TimeFrequencyProfile",
     "TwinPulseProfile",
     "bc_tz",

@@ -84,6 +84,12 @@ class _Progress:
                               f"{elapsed:.1f} s{left}   ")
             self.stream.flush()
 
+    def announce(self, text: str) -> None:
+        """One line before the work starts (the cluster's start, which takes seconds)."""
+        if self.enabled:
+            self.stream.write(f"sweep: {text}\n")
+            self.stream.flush()
+
     def close(self):
         if self.enabled:
             self.stream.write("\n")
@@ -256,6 +262,11 @@ def _sweep_into(target, points, metric_list, out, client, n_workers, timeout, re
     resumed = dict(rows_by_run)
     todo = [i for i in range(len(points)) if i not in rows_by_run]
     meter = _Progress(len(points), len(rows_by_run), progress)
+    if todo and client is None:
+        meter.announce(f"starting a local Dask cluster of {n_workers or os.cpu_count() or 1} worker processes "
+                       f"for {len(todo)} runs (the first takes a while: each worker imports shapefmu and opens the system)")
+    elif todo and isinstance(client, str):
+        meter.announce(f"connecting to the Dask scheduler at {client} for {len(todo)} runs")
     c, cluster, opened = _open_client(client, n_workers) if todo else (None, None, False)
     if store is not None:
         store.open()  # the file changes only now: every check passed and the cluster answers

@@ -160,10 +160,11 @@ def model_from_file(path):
         raise ValueError(f"{path}: the model file raised {type(error).__name__}: {error}") from None
 
 
-def build_all(models_dir=None, out_dir="fmus", *, fmi_version: str = "2.0") -> list[Path]:
+def build_all(models_dir=None, out_dir="fmus", *, fmi_version: str = "2.0", progress=None) -> list[Path]:
     """Build one FMU per plant model in ``models_dir`` (every *.toml, and every *.py defining
     ``plant()``; default: the models that ship with shapefmu) into ``out_dir``, named by
-    ``fmu_file_name``, as FMI ``fmi_version`` FMUs; returns the paths."""
+    ``fmu_file_name``, as FMI ``fmi_version`` FMUs; returns the paths. ``progress`` (a function of
+    a line of text, or None) is told as each model begins."""
     from shapefmu.plants.shipped import models_folder
 
     models_dir, out_dir = Path(models_dir) if models_dir is not None else models_folder(), Path(out_dir)
@@ -171,11 +172,15 @@ def build_all(models_dir=None, out_dir="fmus", *, fmi_version: str = "2.0") -> l
         raise ValueError(f"models_dir must be a directory, got {str(models_dir)!r}")
     built = []
     for path in sorted(models_dir.glob("*.toml")):
+        if progress is not None:
+            progress(f"building the plant FMU of {path.name}")
         part = to_model_part(path)
         built.append(build_plant_fmu(path, out_dir / fmu_file_name(part.name), fmi_version=fmi_version))
     for path in sorted(models_dir.glob("*.py")):
         model = model_from_file(path)
         if model is not None:
+            if progress is not None:
+                progress(f"building the plant FMU of {path.name}")
             built.append(build_plant_fmu(model, out_dir / fmu_file_name(to_model_part(model).name),
                                          fmi_version=fmi_version))
     return built

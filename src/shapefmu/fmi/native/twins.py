@@ -35,10 +35,16 @@ def build_native(name: str, out_path, *, fmi_version: str = "2.0", clock: bool =
                                                                  **start_values)
 
 
-def build_all_native(out_dir, fmi_version: str = "2.0") -> list[Path]:
-    """Every native twin with its default start values into ``out_dir``, named as the pythonfmu FMUs."""
+def build_all_native(out_dir, fmi_version: str = "2.0", progress=None) -> list[Path]:
+    """Every native twin with its default start values into ``out_dir``, named as the pythonfmu FMUs;
+    ``progress`` (a function of a line of text, or None) is told as each FMU begins."""
     out_dir = Path(out_dir)
-    return [build_native(name, out_dir / f"{name}.fmu", fmi_version=fmi_version) for name in TWINS]
+    built = []
+    for name in TWINS:
+        if progress is not None:
+            progress(f"building {name}.fmu (native)")
+        built.append(build_native(name, out_dir / f"{name}.fmu", fmi_version=fmi_version))
+    return built
 
 
 def fingerprint(name: str) -> str:

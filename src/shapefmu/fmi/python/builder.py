@@ -140,7 +140,8 @@ def compile_shim(out: Path, model_identifier: str, guid: str, libpython: str | N
     """
     compiler = os.environ.get("CC") or shutil.which("cc") or shutil.which("gcc")
     if not compiler:
-        raise RuntimeError("a C compiler (cc or gcc, or $CC) is needed to build the FMU's front end")
+        raise ValueError("no C compiler: a pythonfmu FMU's front end is compiled when it is built, with $CC, cc or "
+                         "gcc, and none is on PATH; install one (Debian/Ubuntu: apt install gcc) or set CC")
     libpython = _libpython() if libpython is None else libpython
     if minors is None:
         minors = [sys.version_info.minor] + [m for m in FALLBACK_MINORS if m != sys.version_info.minor]
@@ -217,17 +218,25 @@ def _documentation(xml: str, name: str) -> dict[str, bytes]:
     from shapefmu.fmi.documentation import icon_png, index_html
 
     about = importlib.import_module(f"shapefmu.fmi.python.slaves.{SLAVES[name]}").__doc__
-    libpython = _libpython() or f"libpython3.{sys.version_info.minor} (a shared library)"
+    # The library's file name only: the build machine's folders say nothing about the user's machine.
+    soname = Path(_libpython()).name or f"libpython3.{sys.version_info.minor}.so.1.0"
     dependencies = (f"The {name} FMU runs its model in CPython, embedded through pythonfmu's export library.\n"
-                    f"It needs the CPython 3 shared library: built with {libpython}; where that file is missing it looks "
-                    f"for libpython3.{{{','.join(str(m) for m in (sys.version_info.minor, *FALLBACK_MINORS))}}}.so.1.0 on "
+                    f"It needs the CPython 3 shared library: built with CPython 3.{sys.version_info.minor} ({soname}); "
+                    f"where the build's copy is missing it looks for "
+                    f"libpython3.{{{','.join(str(m) for m in dict.fromkeys((sys.version_info.minor, *FALLBACK_MINORS)))}}}.so.1.0 on "
                     f"the library path.\nIt needs no Python package: its code is inside, under resources/.\n")
     return {"documentation/index.html": index_html(xml.encode(), about, ["linux64"]).encode(),
             "documentation/externalDependencies.txt": dependencies.encode(),
             "model.png": icon_png()}
 
 
-def build_all(out_dir) -> list[Path]:
-    """Build every registered FMU with its default start values into ``out_dir``."""
+def build_all(out_dir, progress=None) -> list[Path]:
+    """Build every registered FMU with its default start values into ``out_dir``; ``progress``
+    (a function of a line of text, or None) is told as each FMU begins."""
     out_dir = Path(out_dir)
-    return [build_fmu(name, out_dir / f"{name}.fmu") for name in SLAVES]
+    built = []
+    for name in SLAVES:
+        if progress is not None:
+            progress(f"building {name}.fmu")
+        built.append(build_fmu(name, out_dir / f"{name}.fmu"))
+    return built
