@@ -2,11 +2,11 @@
 
 A two-mode machine (25 Hz, zeta 0.05 and 62 Hz, zeta 0.08) is recorded as Klipper's TEST_RESONANCES
 records it (a 60 s sweep, 3.2 kHz, jittered timestamps, noise) into results/resonances_x.csv. Then,
-as a user would: identify the modes, rank every shaper family on Klipper's metrics, build the pick
+as a user would: identify the modes, judge every shaper family by Klipper's measures, build the pick
 as a native Shaper or ShapeFilter FMU with its .ssv, and co-simulate a move through that FMU in
 shapefmu's master, driving a native plant FMU of each of the machine's modes (built from
 ``synthetic.plant_model``). The machine's response to the shaped and the unshaped move is drawn in
-results/recording_to_fmu.png, the spectrum with every candidate in results/recommendation.png.
+results/recording_to_fmu.png, the spectrum with the pick and Klipper's pick in results/recommendation.png.
 
     .venv/bin/python examples/recording_to_fmu.py
 """
@@ -22,7 +22,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 from shapefmu.cli import main  # noqa: E402
 from shapefmu.cosim.master import simulate  # noqa: E402
 from shapefmu.fmi.ssp import System  # noqa: E402
-from shapefmu.identification import identify, recommend  # noqa: E402
+from shapefmu.identification import identify, klipper, recommend  # noqa: E402
 from shapefmu.identification import synthetic as syn  # noqa: E402
 
 RESULTS = Path("results")
@@ -42,7 +42,8 @@ def main_example() -> None:
     main(["recommend", str(recording), "--axis", "x", "--plot", str(RESULTS / "recommendation.png"),
           "--build", str(fmu)])
     found = identify(recording, axis="x")
-    pick = recommend([found.spectrum], found.modes.modes).pick
+    # what the command picked with --build: among the designs an FMU holds, judged as Klipper judges
+    pick = recommend(klipper.judged_spectra(found.recording, recording), found.modes.modes, buildable=True).pick
 
     # the machine as plant FMUs, one per mode; the shaper FMU shapes a unit step (its input held at 1)
     system = System("machine").add("shaper", fmu, parameters={"u": 1.0}, ssv=fmu.with_suffix(".ssv"))
@@ -62,7 +63,7 @@ def main_example() -> None:
         percent = ring[1] / ring[0] * math.exp(-mode.zeta * 2 * math.pi * mode.frequency * pick.duration)
         print(f"mode {mode.frequency} Hz: residual after the shaper, shaped / unshaped {100 * ring[1] / ring[0]:.1f} %, "
               f"as a percent residual {100 * percent:.1f} % (the table's worst case at the modes: "
-              f"{100 * pick.at_modes:.1f} %)")
+              f"{100 * pick.at_modes:.1f} %, ours)")
 
     machine = {k: sum(m.share * result[f"{k}{i}.position"] for i, m in enumerate(MACHINE)) for k in ("unshaped", "shaped")}
     fig, ax = plt.subplots(figsize=(9, 4.5))

@@ -1,7 +1,7 @@
 """Shared pytest plumbing.
 
-FMU fixtures are session-scoped (each FMU is built once per test run) and live in one plugin module
-per family, so the families do not share a file.
+FMU fixtures are session-scoped (each FMU is built once per test run, by ``builds``) and live in one
+plugin module per family in tests/support, so the families do not share a file.
 """
 
 from shapefmu.cosim.peer_hosts import preload_tbb
@@ -10,8 +10,10 @@ from shapefmu.cosim.peer_hosts import preload_tbb
 preload_tbb()
 
 pytest_plugins = [
-    "fixtures_fmi",     # pythonfmu FMUs: shapers, filters, profiles, EKF tuner, STOS, reference player
-    "fixtures_plants",  # native C plant FMUs generated from models/
-    "c_host",           # our C test host (hosts_c/fmi2_host.c), compiled once
-    "fixtures_native",  # native C Shaper and ShapeFilter FMUs
+    "support.builds",           # every FMU built once per session
+    "support.fixtures_fmi",     # pythonfmu FMUs: shapers, filters, profiles, EKF tuner, STOS, reference player
+    "support.fixtures_plants",  # native C plant FMUs generated from models/
+    "support.c_hosts",          # our C test hosts (hosts_c/fmi2_host.c, fmi3_host.c), compiled once
+    "support.cross_platform",   # the C hosts for linux64, win64 (Wine) and aarch64 (qemu), compiled once
+    "support.fixtures_native",  # native C Shaper and ShapeFilter FMUs
 ]

@@ -69,3 +69,19 @@ def test_plant_show_lists_the_disk_drive_modes_of_table_1(capsys):
     rows = [line.split() for line in capsys.readouterr().out.splitlines()]
     modes = [(float(r[0]), float(r[2])) for r in rows if len(r) >= 4 and r[0] in ("2000", "3000")]
     assert modes == [(2000.0, 0.01), (3000.0, 0.01)]
+
+
+@pytest.mark.parametrize("quiet", [False, True])
+def test_optimal_tells_a_terminal_each_solver_phase_and_quiet_silences_it(quiet, monkeypatch, capsys):
+    monkeypatch.setattr("sys.stderr.isatty", lambda: True, raising=False)
+    assert main(["optimal", "disk_drive", "--distance", "0.05"] + ["--quiet"] * quiet) == 0
+    out, err = capsys.readouterr()
+    if quiet:
+        assert err == ""
+        return
+    phases = [line.split("] ", 1)[1] for line in err.splitlines()]
+    assert [p.split(":")[0].split(" of ")[0] for p in phases] == [
+        "rigid bang-bang", "time-optimal move", "time-optimal move", "simulating 4 moves on the full plant"]
+    grid_T = float(phases[2].split("grid's ")[1].split(" s")[0])
+    printed = float(out.split("transcription T = ")[1].split(" s")[0])
+    assert grid_T == pytest.approx(printed, rel=1e-5)

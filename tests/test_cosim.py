@@ -9,8 +9,8 @@ import sys
 
 import numpy as np
 import pytest
-from cosim_hosts import run_ecos, run_libcosim
-from cosim_support import build_test_fmu
+from support.ssp_hosts import run_ecos, run_libcosim
+from support.cosim_fmus import build_test_fmu
 
 from shapefmu.cosim import AlgebraicLoopError, CosimError, Master, save_results, simulate
 from shapefmu.fmi.ssp import System, read_ssp, write_ssv

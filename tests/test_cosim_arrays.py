@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from c_fmus import build_array_gain3
+from support.c_fmus import build_array_gain3
 
 import shapefmu
 from shapefmu.cli import main

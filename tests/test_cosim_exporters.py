@@ -1,6 +1,6 @@
 """The master against FMUs that behave as other tools' exports do, with fmpy as the second opinion.
 
-The FMUs are TypedStair variants (tests/fmus_c, built by c_fmus.py), each with one behaviour taken from
+The FMUs are TypedStair variants (tests/fmus_c, built by tests/support/c_fmus.py), each with one behaviour taken from
 the standards' text and seen in a real export: a step with noSetFMUStatePriorToCurrentPoint = false kept
 provisional (the OSP quarter-truck Wheel), every value reset in fmi2SetupExperiment (a 20-sim export),
 discrete inputs of a Model Exchange FMU refused outside event mode (the FMI Reference FMUs), an FMI 3.0
@@ -15,7 +15,7 @@ import os
 import fmpy
 import numpy as np
 import pytest
-from c_fmus import build_typed_stair, build_typed_stair3
+from support.c_fmus import build_typed_stair, build_typed_stair3
 
 from shapefmu.cosim import AlgebraicLoopError, Master, simulate
 from shapefmu.fmi.ssp import System, read_ssp
@@ -95,7 +95,7 @@ def test_a_step_that_will_not_be_rolled_back_is_final(fmus, version, native):
 
 
 def test_a_provisional_fmu_runs_as_in_libcosim(fmus, tmp_path):
-    from cosim_hosts import run_libcosim
+    from support.ssp_hosts import run_libcosim
 
     ssd = minimal_ssd(tmp_path / "wheel.ssd", "w", fmus["provisional", "2"], {"level": "Real"}, {"x_in": ("input", 2.0)})
     ours = simulate(read_ssp(ssd), 1.0, 0.01, record=["w.level"])
@@ -143,7 +143,7 @@ def test_an_fmi3_loop_uses_the_state_rollback_the_fmus_declare(fmus):
 
 
 def test_an_fmi3_loop_without_state_rollback_is_still_refused_by_name(fmus, folder):
-    from c_fmus import typed_stair3_description
+    from support.c_fmus import typed_stair3_description
 
     from shapefmu.cosim import AlgebraicLoopError as Refused
 
@@ -182,7 +182,7 @@ def test_bindings_and_run_values_survive_an_fmu_that_resets_them_in_setup(fmus, 
 
 
 def test_bindings_reach_an_fmu_that_resets_them_in_setup_as_in_libcosim(fmus, tmp_path):
-    from cosim_hosts import run_libcosim
+    from support.ssp_hosts import run_libcosim
 
     ssd = minimal_ssd(tmp_path / "crane.ssd", "crane", fmus["reset in setup", "2"], {"counter": "Integer"},
                       {"increment": ("parameter", 69)})

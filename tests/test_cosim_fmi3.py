@@ -3,6 +3,8 @@ FMUs -- against the all-FMI 2.0 system, fmpy, and the exact solution."""
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 import scipy.linalg
@@ -16,14 +18,9 @@ PLANT_OUTPUTS = ["plant.position", "plant.deflection_1", "plant.deflection_2"]
 
 
 @pytest.fixture(scope="module")
-def fmus(tmp_path_factory):
-    from shapefmu.fmi import build_fmu
-    from shapefmu.fmi.native import build_plant_fmu
-
-    folder = tmp_path_factory.mktemp("fmi3")
-    return {"plant2": build_plant_fmu(MODEL, folder / "DiskDrive.fmu"),
-            "plant3": build_plant_fmu(MODEL, folder / "DiskDrive3.fmu", fmi_version="3.0"),
-            "shaper": build_fmu("Shaper", folder / "Shaper.fmu")}
+def fmus(builds):
+    return {"plant2": builds.plant(MODEL), "plant3": builds.plant(MODEL, fmi_version="3.0"),
+            "shaper": builds.pythonfmu("Shaper")}
 
 
 def test_the_fmi3_plant_passes_fmpy_validation(fmus):
@@ -98,8 +95,8 @@ def test_an_fmi3_parameter_error_names_the_component_and_the_call(fmus):
     from shapefmu.cosim import CosimError
 
     # f is an FMI 3.0 array: its element is set with the whole array, the other element at its start
-    with pytest.raises(CosimError, match=r"component 'plant' \(DiskDrive3.fmu\): fmi3SetFloat64\(f=\[-1.0, 3000.0\]\) "
-                                         r"returned fmi3Error.*parameter f\[1\] must be > 0, got -1"):
+    with pytest.raises(CosimError, match=rf"component 'plant' \({re.escape(fmus['plant3'].name)}\): fmi3SetFloat64\(f=\[-1.0, "
+                                         r"3000.0\]\) returned fmi3Error.*parameter f\[1\] must be > 0, got -1"):
         simulate(System().add("plant", fmus["plant3"], {"f[1]": -1.0}), 1e-4, 1e-5)
 
 
@@ -138,7 +135,7 @@ TYPED_RECORD = ["a.counter", "a.n_out", "a.e_out", "a.b_out", "a.s_out", "a.x_ou
 
 @pytest.fixture(scope="module")
 def stairs(tmp_path_factory):
-    from c_fmus import build_typed_stair, build_typed_stair3
+    from support.c_fmus import build_typed_stair, build_typed_stair3
 
     folder = tmp_path_factory.mktemp("stairs")
     return {"2": build_typed_stair(folder), "3": build_typed_stair3(folder)}

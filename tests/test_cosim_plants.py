@@ -5,12 +5,12 @@ from __future__ import annotations
 import signal
 import subprocess
 import sys
-import time
 
 import numpy as np
 import pytest
 import scipy.linalg
-from cosim_hosts import run_ecos, run_libcosim
+from support.run_watch import OutputWatch
+from support.ssp_hosts import run_ecos, run_libcosim
 
 from shapefmu.cosim import Master, simulate
 from shapefmu.fmi.ssp import System
@@ -105,9 +105,10 @@ def test_ctrl_c_stops_a_long_run_cleanly_and_keeps_the_partial_results(disk_driv
         [sys.executable, "-m", "shapefmu", "simulate", str(ssp), "--stop", "1000", "--step", "1e-6",
          "--record", "plant.position", "--output-interval", "1e-3", "--progress", "--out", str(out)],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    time.sleep(5.0)  # start-up, then at least one progress update
+    watch = OutputWatch(process)
+    watch.wait_for("steps/s")  # start-up, then at least one progress update: not a fixed time
     process.send_signal(signal.SIGINT)
-    stdout, stderr = process.communicate(timeout=60)
+    stdout, stderr = watch.finish()
     assert process.returncode == 130, stderr
     assert "steps/s\nshapefmu simulate: co-simulation interrupted at t = " in stderr  # the bar, then the message
     saved = np.genfromtxt(out, delimiter=",", names=True)

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from cosim_hosts import run_ecos, run_libcosim
+from support.ssp_hosts import run_ecos, run_libcosim
 
 from shapefmu.cosim import simulate
 from shapefmu.cosim.compare import FMUCache, move_metrics

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from c_fmus import build_typed_stair
+from support.c_fmus import build_typed_stair
 
 from shapefmu.cosim import Master, Termination, save_results, simulate
 from shapefmu.fmi.ssp import System, read_ssp, write_ssv

@@ -1,7 +1,7 @@
 """The papers end to end through FMUs (examples/paper00*_fmu.py) agree with the design layer.
 
 Each example's ``run()`` drives FMUs with the co-simulation master; the FMUs come from the session
-fixtures (fixtures_fmi.py, fixtures_plants.py) where one fits, parameter bindings setting what
+fixtures (tests/support/fixtures_fmi.py, fixtures_plants.py) where one fits, parameter bindings setting what
 their start values do not. Every tolerance below is derived in the test's comment or in the
 example's docstring; none is a measured difference widened.
 """

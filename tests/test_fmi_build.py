@@ -4,10 +4,10 @@ import zipfile
 
 import numpy as np
 import pytest
-from fixtures_fmi import SHAPER_STARTS
 from fmpy.validation import validate_fmu
-from fmu_drivers import run_fmpy
-from hosts import run_ecos_program
+
+from support.fixtures_fmi import SHAPER_STARTS
+from support.hosts import run_ecos_program, run_fmpy, y_of_u
 
 from shapefmu.cli import main
 from shapefmu.fmi import build_fmu
@@ -45,6 +45,6 @@ def test_the_bundled_package_name_follows_the_sources():
 def test_runs_in_the_ecos_command_line_host_without_python_or_ld_preload(shaper_fmu, tmp_path):
     y = run_ecos_program(shaper_fmu, step=0.001, stop_time=0.12, workdir=tmp_path)["instance::y[REAL]"]
     # Same FMU in fmpy, u at its start value 0 from rest at u0 = -1: ecos writes 6 decimals.
-    reference = [-0.5 * 1.0] + run_fmpy(shaper_fmu, [0.0] * (y.size - 1), 1e-3)
+    reference = [-0.5 * 1.0] + y_of_u(run_fmpy, shaper_fmu, [0.0] * (y.size - 1), 1e-3)
     assert SHAPER_STARTS["u0"] == -1.0  # the rest value the reference's first sample assumes
     np.testing.assert_allclose(y, reference, rtol=0, atol=5e-7)

@@ -1,6 +1,6 @@
 """Every FMU answers any step a host chooses: sampled FMUs take their samples on t0 + k Ts.
 
-Driven by our C host (hosts_c/fmi2_host.c, run by c_host.py) the way the FMU compliance checker
+Driven by our C host (hosts_c/fmi2_host.c, run by tests/support/c_hosts.py) the way the FMU compliance checker
 (fmuCheck) and OMSimulator drive an FMU: time kept as ``t += h`` with the last step trimmed onto the
 stop time (after 2000 steps of 1 ms towards 2 s the last step is 1.1e-13 s), steps of stop/500
 (fmuCheck's default), random steps from 1e-9 Ts to 7.3 Ts. Every FMU that ``shapefmu build``
@@ -17,8 +17,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from c_host import fmu_arguments, host_rows, run_host
-from sampled_reference import SampledRun
+from support.c_hosts import fmu_arguments, host_rows, run_host
+from support.sampled_reference import SampledRun
 
 from shapefmu.fmi.python.slaves import SLAVES
 from shapefmu.runtime import shaper_designs
@@ -149,7 +149,7 @@ def test_samples_are_counted_from_the_start_time_of_the_experiment(built, c_host
 
 
 def test_feed_through_shape_filter_at_random_steps_is_the_sampled_design_held(feedthrough_filter_fmu, c_host, tmp_path):
-    from fixtures_fmi import FEEDTHROUGH_FILTER_STARTS as starts
+    from support.fixtures_fmi import FEEDTHROUGH_FILTER_STARTS as starts
 
     taps = WINDOW_FILTERS["rectangle"](2 * math.pi * starts["f"], starts["zeta"], starts["Ts"]).taps
     assert taps[0] != 0.0  # y feeds through: the latch between samples shows

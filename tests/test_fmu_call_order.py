@@ -18,7 +18,7 @@ the same states they answer the same calls with the same status and message.
 from __future__ import annotations
 
 import pytest
-from c_host import fmu_arguments, run_host
+from support.c_hosts import fmu_arguments, run_host
 from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
 

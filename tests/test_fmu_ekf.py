@@ -1,31 +1,20 @@
 """The EKFTuner FMU against the runtime EKF-tuned shaper kernel called directly (paper 001)."""
 
-import math
-
 import numpy as np
 import pytest
-from fixtures_fmi import EKF_STARTS
 from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
-from fmu_drivers import initialised, refused_initialisation
-from fmu_signal_drivers import run_ecos, run_fmpy, run_libcosim
-from sampled_reference import SampledRun
+
+from support.fixtures_fmi import EKF_STARTS
+from support.fmpy_slaves import initialised, refused_initialisation
+from support.hosts import run_ecos, run_fmpy, run_libcosim
+from support.sampled_reference import SampledRun
+from support.scenarios import EKF_OUTPUTS as OUTPUTS
+from support.scenarios import OMEGA, drive_ekf, ekf_signals, ekf_state_replays
 
 from shapefmu.runtime.ekf_tuner import EKFTunedShaperKernel
 
 H = EKF_STARTS["Ts"]
-OUTPUTS = ["y", "omega_est", "zeta_est", "converged"]
-OMEGA, ZETA = 2 * math.pi * 10.0, 0.02  # the ring-down the tuner watches (paper 001: 10 Hz)
-
-
-def _signals(count, seed=0):
-    """A noisy 10 Hz ring-down and a command that moves, rests, and moves again."""
-    rng = np.random.default_rng(seed)
-    t = np.arange(count) * H
-    sigma, omega_d = ZETA * OMEGA, OMEGA * math.sqrt(1 - ZETA**2)
-    vibration = np.exp(-sigma * t) * np.sin(omega_d * t) + 0.01 * rng.normal(size=count)
-    command = np.where((t > 0.05) & (t < 0.3), 1.0, 0.0) + np.where(t > 1.5, 2.0, 0.0)
-    return [{"u": float(u), "vibration": float(v)} for u, v in zip(command, vibration)]
 
 
 def _kernel_rows(inputs):
@@ -43,7 +32,7 @@ def test_model_description_passes_fmpy_validation(ekf_fmu):
 
 
 def test_outputs_equal_the_runtime_kernel_called_directly(ekf_fmu):
-    inputs = _signals(2500)
+    inputs = ekf_signals(2500)
     expected, kernel = _kernel_rows(inputs)
     assert kernel.designs >= 1 and kernel.filter is not None  # it tuned and shaped within the run
     assert kernel.ekf.omega_n == pytest.approx(OMEGA, rel=0.01)
@@ -51,55 +40,34 @@ def test_outputs_equal_the_runtime_kernel_called_directly(ekf_fmu):
 
 
 def test_outputs_identical_in_fmpy_libcosim_and_ecos(ekf_fmu):
-    inputs = _signals(800, seed=1)
+    inputs = ekf_signals(800, seed=1)
     reference = run_fmpy(ekf_fmu, inputs, H, OUTPUTS)
     for other in (run_libcosim(ekf_fmu, inputs, H, OUTPUTS), run_ecos(ekf_fmu, inputs, H, OUTPUTS)):
         np.testing.assert_allclose(other, reference, rtol=0, atol=1e-12)
 
 
-def _drive(slave, vr, inputs, start):
-    rows = []
-    for k, values in enumerate(inputs, start=start):
-        slave.setReal([vr["u"], vr["vibration"]], [values["u"], values["vibration"]])
-        slave.doStep(k * H, H)
-        rows.append(slave.getReal([vr[name] for name in OUTPUTS]))
-    return rows
-
-
 def test_state_restores_the_ekf_covariance_and_shaper_exactly(ekf_fmu):
     # Saved mid-convergence (covariance still moving) and replayed: bit-for-bit the same estimates.
-    inputs = _signals(1500, seed=2)
-    slave, vr = initialised(ekf_fmu)
-    _drive(slave, vr, inputs[:400], 0)
-    state = slave.getFMUState()
-    raw = slave.serializeFMUState(state)
-    first = _drive(slave, vr, inputs[400:], 400)
-    slave.setFMUState(state)
-    again = _drive(slave, vr, inputs[400:], 400)
-    slave.freeInstance()
-    fresh, vr = initialised(ekf_fmu)
-    fresh.setFMUState(fresh.deserializeFMUState(raw))
-    restored = _drive(fresh, vr, inputs[400:], 400)
-    fresh.freeInstance()
+    first, again, restored = ekf_state_replays(ekf_fmu, ekf_signals(1500, seed=2), 400)
     assert again == first and restored == first
     assert first[-1][3] == 1.0  # the replay covers the convergence and the switch-in
 
 
 def test_nan_vibration_fails_that_step_and_the_run_continues_unchanged(ekf_fmu):
-    inputs = _signals(300, seed=3)
+    inputs = ekf_signals(300, seed=3)
     slave, vr = initialised(ekf_fmu)
-    rows = _drive(slave, vr, inputs[:100], 0)
+    rows = drive_ekf(slave, vr, inputs[:100], 0)
     slave.setReal([vr["vibration"]], [float("nan")])
     with pytest.raises(FMICallException) as failure:
         slave.doStep(100 * H, H)
     assert failure.value.status == 3
-    rows += _drive(slave, vr, inputs[100:], 100)
+    rows += drive_ekf(slave, vr, inputs[100:], 100)
     slave.freeInstance()
     assert rows == run_fmpy(ekf_fmu, inputs, H, OUTPUTS)
 
 
 def test_steps_of_2_5_samples_run_the_kernel_once_per_sample_and_hold_its_outputs(ekf_fmu):
-    inputs = _signals(1200, seed=4)
+    inputs = ekf_signals(1200, seed=4)
     step = 2.5 * H
     rows = run_fmpy(ekf_fmu, inputs, step, OUTPUTS)  # outputs after each step, at (k + 1) * step
     run = SampledRun(step * np.arange(len(inputs) + 1), [[v["u"], v["vibration"]] for v in inputs] + [[0.0, 0.0]], H)

@@ -21,8 +21,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from c_host import fmu_arguments, host_rows, run_host
-from fixtures_fmi import SHAPER_STARTS
+from support.c_hosts import fmu_arguments, host_rows, run_host
+from support.fixtures_fmi import SHAPER_STARTS
 
 RUN = ["--stop", 0.2, "--step", 1e-3]
 

@@ -35,6 +35,9 @@ from pathlib import Path
 
 import pytest
 
+from support import CTYPES_HOST
+from support.valgrind import requires_valgrind
+
 H = 1e-3  # every FMU below samples at 1 ms
 STEPS = 240
 NAN_AT = 170  # the step at which our FMUs get a NaN input (fmi2Error), then the step is redone
@@ -219,8 +222,8 @@ def _drive(paths, mode):
 
 
 def _build_all(directory: Path) -> dict:
-    from cosim_support import build_test_fmu
-    from fixtures_fmi import EKF_STARTS, SHAPER_STARTS
+    from support.cosim_fmus import build_test_fmu
+    from support.fixtures_fmi import EKF_STARTS, SHAPER_STARTS
 
     from shapefmu.fmi import build_fmu
 
@@ -230,7 +233,7 @@ def _build_all(directory: Path) -> dict:
         "shaper_b": {"path": str(build_fmu("Shaper", directory / "ShaperB.fmu", **{**SHAPER_STARTS, "f[1]": 12.5})),
                      "ours": True},
         "ekf": {"path": str(build_fmu("EKFTuner", directory / "EKFTuner.fmu", **EKF_STARTS)), "ours": True},
-        # A plain pythonfmu FMU, as the master's tests build them (tests/cosim_support.py).
+        # A plain pythonfmu FMU, as the master's tests build them (tests/support/cosim_fmus.py).
         "plain": {"path": str(build_test_fmu("CosimIntegrator", directory / "plain")), "ours": False},
     }
 
@@ -295,10 +298,12 @@ def test_an_exception_escaping_a_slave_is_fatal_for_that_instance_only_and_relea
     # ...and the side-by-side instances above, stepped after all this, still matched (first test).
 
 
+@pytest.mark.foreign
+@requires_valgrind
 def test_valgrind_sees_no_invalid_access_in_the_fmu_binaries_of_a_python_host(tmp_path):
     """pythonfmu's library destructor resets a std::shared_ptr the C++ exit handlers have freed;
     the front end's own exit handler resets it first (shim/python_runtime.c)."""
-    from fixtures_fmi import EKF_STARTS, SHAPER_STARTS
+    from support.fixtures_fmi import EKF_STARTS, SHAPER_STARTS
 
     from shapefmu.fmi import build_fmu
 
@@ -308,7 +313,7 @@ def test_valgrind_sees_no_invalid_access_in_the_fmu_binaries_of_a_python_host(tm
             fmu.extractall(tmp_path / name)
         directories.append(str(tmp_path / name))
     log = tmp_path / "valgrind.log"
-    driver = Path(__file__).with_name("fmi2_ctypes_driver.py")
+    driver = CTYPES_HOST
     result = subprocess.run(
         ["valgrind", "--error-limit=no", "--num-callers=20", f"--log-file={log}",
          sys.executable, "-I", "-S", str(driver), ",".join(directories), "50", str(H)],

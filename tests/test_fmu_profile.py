@@ -6,10 +6,11 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 import pytest
-from fixtures_fmi import PROFILE_STARTS
 from fmpy.validation import validate_fmu
-from fmu_drivers import fmpy_slave, refused_initialisation, variable_references
-from fmu_signal_drivers import run_ecos, run_fmpy, run_libcosim
+
+from support.fixtures_fmi import PROFILE_STARTS
+from support.fmpy_slaves import instantiated, refused_initialisation, variable_references
+from support.hosts import run_ecos, run_fmpy, run_libcosim
 
 from shapefmu.runtime import shaped_bang_bang, shaper_designs, time_frequency, twin_pulse
 
@@ -73,7 +74,7 @@ def test_time_frequency_outputs_equal_the_runtime_profile_with_its_optimal_scale
 def test_start_input_starts_the_move_at_that_communication_point(profile_fmu):
     design = twin_pulse.twin_pulse_profile("M-BC:TZ:TP", 3.5, 1.7, 0.7, attenuation=0.05, ts=1e-3)
     vr = variable_references(profile_fmu)
-    slave = fmpy_slave(profile_fmu)
+    slave = instantiated(profile_fmu)
     slave.setupExperiment(startTime=0.0)
     slave.enterInitializationMode()
     slave.setReal([vr["t_start"]], [-1.0])
@@ -107,7 +108,7 @@ def test_state_restores_the_started_move_in_a_fresh_instance(profile_fmu):
     outputs = [vr[n] for n in OUTPUTS]
 
     def fresh():
-        slave = fmpy_slave(profile_fmu)
+        slave = instantiated(profile_fmu)
         slave.setupExperiment(startTime=0.0)
         slave.enterInitializationMode()
         slave.setReal([vr["t_start"]], [-1.0])

@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
-from fmu_drivers import fmpy_slave, initialised, variable_references
-from fmu_signal_drivers import run_ecos, run_fmpy, run_libcosim
+
+from support.fmpy_slaves import initialised, instantiated, variable_references
+from support.hosts import run_ecos, run_fmpy, run_libcosim
 
 from shapefmu.cli import main
 from shapefmu.runtime.reference_player import from_dict
@@ -81,7 +82,7 @@ def test_state_restores_the_playback_position(reference_fmu, time_optimal_soluti
 
 def test_a_table_that_is_not_json_fails_initialisation_with_a_logged_error(reference_fmu, capfd):
     vr = variable_references(reference_fmu)
-    slave = fmpy_slave(reference_fmu, "bad")
+    slave = instantiated(reference_fmu, "bad")
     slave.setupExperiment(startTime=0.0)
     slave.enterInitializationMode()
     slave.setString([vr["table"]], ["time,u\n0,1\n"])

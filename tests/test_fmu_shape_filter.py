@@ -4,58 +4,45 @@ import json
 import math
 import subprocess
 import sys
-import xml.etree.ElementTree as ET
 import zipfile
-from pathlib import Path
 
 import numpy as np
 import pytest
-from fixtures_fmi import (
+from fmpy.fmi1 import FMICallException
+from fmpy.validation import validate_fmu
+
+from support import CTYPES_HOST
+from support.declarations import assert_documented, model_xml
+from support.fixtures_fmi import (
     FEEDTHROUGH_FILTER_STARTS,
     SHAPE_FILTER_F,
     SHAPE_FILTER_STARTS,
     SHAPE_FILTER_ZETA,
     command_signal,
 )
-from fmpy.fmi1 import FMICallException
-from fmpy.validation import validate_fmu
-from fmu_drivers import (
+from support.fmpy_slaves import (
     assert_nan_input_fails_that_step_only,
     assert_state_restores_exactly,
     configured,
     initialised,
-    run_ecos,
-    run_fmpy,
-    run_libcosim,
+    y_after_each_set,
 )
-from hosts import run_ecos_program
-from sampled_reference import SampledRun
+from support.hosts import run_ecos, run_ecos_program, run_fmpy, run_libcosim, y_of_u
+from support.sampled_reference import SampledRun
 
 from shapefmu.runtime import time_frequency as runtime_time_frequency
 from shapefmu.shapers import TWIN_PULSE_PROFILES, WINDOW_FILTERS, SampledShaper, time_frequency_profile
 
 H = 1e-3
-TESTS = Path(__file__).parent
 OMEGA = 2 * math.pi * SHAPE_FILTER_F
 
 
-def _xml(path):
-    with zipfile.ZipFile(path) as fmu:
-        return ET.fromstring(fmu.read("modelDescription.xml"))
-
-
 def _feedthrough_outputs(path, parameters, commands):
-    """(y read right after u is set at each communication point, Ts_used); one sample per step."""
-    slave, vr = configured(path, parameters)
-    slave.exitInitializationMode()
+    """(y read right after u is set at each communication point k Ts_used, Ts_used): one sample per step."""
+    slave, vr = initialised(path, parameters)
     (ts,) = slave.getReal([vr["Ts_used"]])
-    outputs = []
-    for k, u in enumerate(commands):
-        slave.setReal([vr["u"]], [u])
-        outputs.append(slave.getReal([vr["y"]])[0])
-        slave.doStep(k * ts, ts)
     slave.freeInstance()
-    return np.array(outputs), ts
+    return np.array(y_after_each_set(path, commands, [(k * ts, ts) for k in range(len(commands))], parameters)), ts
 
 
 def _offline(shaper, commands, u0=0.0):
@@ -84,14 +71,8 @@ def test_model_descriptions_pass_fmpy_validation(shape_filter_fmu, feedthrough_f
 
 
 def test_hanning_does_not_feed_through_and_every_variable_has_unit_and_description(shape_filter_fmu):
-    root = _xml(shape_filter_fmu)
-    cs = root.find("CoSimulation")
-    assert (cs.get("needsExecutionTool"), cs.get("canGetAndSetFMUstate"), cs.get("canSerializeFMUstate")) == ("false", "true", "true")
-    variables = root.find("ModelVariables").findall("ScalarVariable")
-    index = {v.get("name"): str(i + 1) for i, v in enumerate(variables)}
-    assert all(v.get("description") for v in variables)
-    assert all(r.get("unit") for v in variables for r in v.iter("Real"))
-    assert {r.get("unit") for r in root.iter("Real")} <= {u.get("name") for u in root.find("UnitDefinitions")}
+    root = model_xml(shape_filter_fmu)
+    index = assert_documented(root)
     outputs = {o.get("index"): o for o in root.find("ModelStructure/Outputs")}
     # The Hanning window's first sample is 0.5 - 0.5 cos 0 = 0: y at t depends on u before t only.
     assert _fixture_design().taps[0] == 0.0
@@ -103,7 +84,7 @@ def test_hanning_does_not_feed_through_and_every_variable_has_unit_and_descripti
 
 
 def test_rectangle_feeds_through_with_a_fixed_factor(feedthrough_filter_fmu):
-    root = _xml(feedthrough_filter_fmu)
+    root = model_xml(feedthrough_filter_fmu)
     variables = root.find("ModelVariables").findall("ScalarVariable")
     index = {v.get("name"): str(i + 1) for i, v in enumerate(variables)}
     outputs = {o.get("index"): o for o in root.find("ModelStructure/Outputs")}
@@ -221,11 +202,11 @@ def test_cli_bakes_a_design_and_refuses_a_bad_one_with_exit_code_2(tmp_path, cap
 def test_outputs_identical_in_fmpy_libcosim_and_ecos(fixture, request):
     path = request.getfixturevalue(fixture)
     commands = command_signal(400)
-    reference = run_fmpy(path, commands, H)
+    reference = y_of_u(run_fmpy, path, commands, H)
     starts = SHAPE_FILTER_STARTS if fixture == "shape_filter_fmu" else FEEDTHROUGH_FILTER_STARTS
     shaper = WINDOW_FILTERS[starts["kind"]](OMEGA, SHAPE_FILTER_ZETA, H, starts.get("order", 1))
     np.testing.assert_allclose(reference, _after_each_step(shaper, commands, starts.get("u0", 0.0)), rtol=0, atol=1e-12)
-    for other in (run_libcosim(path, commands, H), run_ecos(path, commands, H)):
+    for other in (y_of_u(run_libcosim, path, commands, H), y_of_u(run_ecos, path, commands, H)):
         np.testing.assert_allclose(other, reference, rtol=0, atol=1e-12)
 
 
@@ -243,7 +224,7 @@ def test_runs_with_only_the_standard_library(shape_filter_fmu, tmp_path):
     directory = extract(str(shape_filter_fmu), str(tmp_path / "unzipped"))
     steps = 300
     result = subprocess.run(
-        [sys.executable, "-I", "-S", str(TESTS / "fmi2_ctypes_driver.py"), str(directory), str(steps), str(H)],
+        [sys.executable, "-I", "-S", str(CTYPES_HOST), str(directory), str(steps), str(H)],
         capture_output=True, text=True, timeout=60,
     )
     assert result.returncode == 0, result.stderr
@@ -292,13 +273,7 @@ def test_bad_parameters_fail_initialisation_with_error_and_a_logged_message(shap
 @pytest.mark.parametrize("step", [3 * H, 1.5 * H, 0.4 * H])
 def test_steps_of_any_size_sample_on_the_grid_and_hold_between_samples(shape_filter_fmu, step):
     commands = command_signal(300)
-    slave, vr = initialised(shape_filter_fmu)
-    out = []
-    for k, u in enumerate(commands):
-        slave.setReal([vr["u"]], [u])
-        out.append(slave.getReal([vr["y"]])[0])
-        slave.doStep(k * step, step)
-    slave.freeInstance()
+    out = y_after_each_set(shape_filter_fmu, commands, [(k * step, step) for k in range(len(commands))])
     run = SampledRun(step * np.arange(len(commands)), commands, H)
     expected = run.fir(_fixture_design().taps, SHAPE_FILTER_STARTS["u0"])
     np.testing.assert_allclose(out, expected, rtol=0, atol=1e-12)

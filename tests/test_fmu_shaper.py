@@ -4,45 +4,32 @@ import json
 import math
 import subprocess
 import sys
-import xml.etree.ElementTree as ET
 import zipfile
-from pathlib import Path
 
 import numpy as np
 import pytest
-from fixtures_fmi import MULTIMODE_STARTS, SHAPER_STARTS, command_signal
 from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
-from fmu_drivers import (
+
+from support import CTYPES_HOST
+from support.declarations import assert_documented, model_xml
+from support.fixtures_fmi import MULTIMODE_STARTS, SHAPER_STARTS, command_signal
+from support.fmpy_slaves import (
     assert_nan_input_fails_that_step_only,
     assert_state_restores_exactly,
     initialised,
-    run_ecos,
-    run_fmpy,
-    run_libcosim,
+    y_after_each_set,
 )
+from support.hosts import run_ecos, run_fmpy, run_libcosim, y_of_u
 
 from shapefmu.shapers import design
 
 H = 1e-3
-TESTS = Path(__file__).parent
-
-
-def _xml(path):
-    with zipfile.ZipFile(path) as fmu:
-        return ET.fromstring(fmu.read("modelDescription.xml"))
 
 
 def _sampled_outputs(path, commands):
-    """y read right after u is set at each communication point, then one step (feed-through)."""
-    slave, vr = initialised(path)
-    outputs = []
-    for k, u in enumerate(commands):
-        slave.setReal([vr["u"]], [u])
-        outputs.append(slave.getReal([vr["y"]])[0])
-        slave.doStep(k * H, H)
-    slave.freeInstance()
-    return np.array(outputs)
+    """y read right after u is set at each communication point k H, then one step (feed-through)."""
+    return np.array(y_after_each_set(path, commands, [(k * H, H) for k in range(len(commands))]))
 
 
 def test_model_description_passes_fmpy_validation(shaper_fmu):
@@ -50,15 +37,8 @@ def test_model_description_passes_fmpy_validation(shaper_fmu):
 
 
 def test_model_description_declares_feed_through_units_and_state_handling(shaper_fmu):
-    root = _xml(shaper_fmu)
-    cs = root.find("CoSimulation")
-    assert (cs.get("needsExecutionTool"), cs.get("canGetAndSetFMUstate"), cs.get("canSerializeFMUstate")) == ("false", "true", "true")
-    variables = root.find("ModelVariables").findall("ScalarVariable")
-    index = {v.get("name"): str(i + 1) for i, v in enumerate(variables)}
-    assert all(v.get("description") for v in variables)
-    assert all(r.get("unit") for v in variables for r in v.iter("Real"))
-    units = {u.get("name") for u in root.find("UnitDefinitions")}
-    assert {r.get("unit") for r in root.iter("Real")} <= units
+    root = model_xml(shaper_fmu)
+    index = assert_documented(root)
     (output,) = root.find("ModelStructure/Outputs")
     # ZV's first impulse is at t = 0: y feeds through from u, with the factor fixed at initialisation.
     assert (output.get("index"), output.get("dependencies"), output.get("dependenciesKind")) == (index["y"], index["u"], "fixed")
@@ -100,8 +80,8 @@ def test_ei_family_output_equals_the_sampled_design(tmp_path):
 
 def test_outputs_identical_in_fmpy_libcosim_and_ecos(shaper_fmu):
     commands = command_signal(150)
-    reference = run_fmpy(shaper_fmu, commands, H)
-    for other in (run_libcosim(shaper_fmu, commands, H), run_ecos(shaper_fmu, commands, H)):
+    reference = y_of_u(run_fmpy, shaper_fmu, commands, H)
+    for other in (y_of_u(run_libcosim, shaper_fmu, commands, H), y_of_u(run_ecos, shaper_fmu, commands, H)):
         np.testing.assert_allclose(other, reference, rtol=0, atol=1e-12)
 
 
@@ -206,7 +186,7 @@ def test_runs_with_only_the_standard_library_and_two_builds_run_their_own_code(s
     dirs = [extract(str(p), str(tmp_path / name)) for p, name in ((shaper_fmu, "a"), (other, "b"))]
     steps = 120
     result = subprocess.run(
-        [sys.executable, "-I", "-S", str(TESTS / "fmi2_ctypes_driver.py"), ",".join(map(str, dirs)), str(steps), str(H)],
+        [sys.executable, "-I", "-S", str(CTYPES_HOST), ",".join(map(str, dirs)), str(steps), str(H)],
         capture_output=True, text=True, timeout=60,
     )
     assert result.returncode == 0, result.stderr

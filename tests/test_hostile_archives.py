@@ -25,8 +25,10 @@ def simulate(system):
 
 @pytest.fixture
 def shaper_system(shaper_fmu, tmp_path):
-    """An .ssp holding one Shaper FMU (fixtures_fmi.shaper_fmu) under resources/."""
-    return System("alone").add("shaper", shaper_fmu).write_ssp(tmp_path / "alone.ssp")
+    """An .ssp holding one Shaper FMU (fixtures_fmi.shaper_fmu) under resources/, as Shaper.fmu."""
+    fmu = tmp_path / "Shaper.fmu"
+    shutil.copy(shaper_fmu, fmu)  # the session's build has a file name of its own
+    return System("alone").add("shaper", fmu).write_ssp(tmp_path / "alone.ssp")
 
 
 def add_zeros(ssp: Path, member: str, size: int) -> None:

@@ -4,11 +4,10 @@ time. Table-driven per command (design, plant, optimal, stos, build, simulate, s
 for the numbers of design and simulate, and SIGTERM to a running simulate, which saves its results."""
 
 import math
+import shutil
 import signal
 import subprocess
 import sys
-import threading
-import time
 from pathlib import Path
 
 import numpy as np
@@ -17,6 +16,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from hostile_support import guarded
+from support.run_watch import OutputWatch
 
 from shapefmu.fmi.ssp import System
 
@@ -26,8 +26,11 @@ DISK = str(MODELS / "disk_drive.toml")
 
 @pytest.fixture(scope="module")
 def shaper_ssp(tmp_path_factory, shaper_fmu):
-    """The ZV Shaper FMU of fixtures_fmi (10 Hz, Ts = 1 ms) alone in a system."""
-    return System("alone").add("shaper", shaper_fmu).write_ssp(tmp_path_factory.mktemp("cli_alone") / "alone.ssp")
+    """The ZV Shaper FMU of fixtures_fmi (10 Hz, Ts = 1 ms) alone in a system, as Shaper.fmu."""
+    folder = tmp_path_factory.mktemp("cli_alone")
+    fmu = folder / "Shaper.fmu"
+    shutil.copy(shaper_fmu, fmu)  # the session's build has a file name of its own
+    return System("alone").add("shaper", fmu).write_ssp(folder / "alone.ssp")
 
 
 def assert_refused(argv, code, words, workdir):
@@ -199,18 +202,10 @@ def test_sigterm_stops_simulate_and_saves_what_it_recorded(shaper_ssp, tmp_path)
         [sys.executable, "-m", "shapefmu", "simulate", str(shaper_ssp), "--stop", "1e4", "--step", "1e-3",
          "--output-interval", "1e-2", "--progress", "--out", str(out), "--set", "shaper.u0=0"],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    seen = []
-    reader = threading.Thread(target=lambda: seen.extend(iter(lambda: process.stderr.read(1), "")), daemon=True)
-    reader.start()
-    deadline = time.monotonic() + 60
-    while "steps/s" not in "".join(seen) and time.monotonic() < deadline and process.poll() is None:
-        time.sleep(0.05)
-    assert "steps/s" in "".join(seen), "".join(seen)  # running, past its first progress update
+    watch = OutputWatch(process)
+    watch.wait_for("steps/s")  # running, past its first progress update
     process.send_signal(signal.SIGTERM)
-    stdout = process.stdout.read()  # stderr stays the reader thread's alone: two readers would split it
-    process.wait(timeout=60)
-    reader.join(timeout=10)
-    stderr = "".join(seen)
+    stdout, stderr = watch.finish()
     assert process.returncode == 143, stderr
     assert "shapefmu simulate: co-simulation interrupted at t = " in stderr and "(SIGTERM)" in stderr
     assert "Traceback" not in stderr

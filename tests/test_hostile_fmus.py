@@ -222,7 +222,7 @@ def test_a_forged_state_with_values_a_set_would_refuse_is_refused(fmus, variable
     host = Host(*fmus["shaper"])
     c = host.initialized()
     data = serialised(host, c)
-    offset = 8 * 8 + 3 * 8 + 8 * host.vr[variable]  # the header, time, start time, clock ticks, then the Reals
+    offset = 8 * 8 + 3 * 8 + 3 * 8 + 8 * host.vr[variable]  # the header, time, start time, clock ticks, clock position, Reals
     data[offset:offset + 8] = struct.pack("<d", value)
     forged = c_void_p()
     assert host("fmi2DeSerializeFMUstate", c, (ctypes.c_char * len(data)).from_buffer(data), c_size_t(len(data)),

@@ -16,6 +16,7 @@ import time
 import numpy as np
 import pytest
 from hostile_support import guarded
+from support.run_watch import OutputWatch
 
 from shapefmu.cosim.output_files import output_lock
 from shapefmu.fmi.ssp import System
@@ -42,7 +43,7 @@ def start_simulate(ssp, out, stop="2", *extra):
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
 
 
-def wait_for(process, words, seconds=120):
+def wait_for(process, words, seconds=600):
     """Read ``process``'s stdout until a line holds ``words``; the lines read."""
     lines, deadline = [], time.monotonic() + seconds
     while time.monotonic() < deadline:
@@ -73,9 +74,10 @@ def test_a_signal_while_the_results_are_written_leaves_them_whole(plant_ssp, tmp
 def test_a_run_stopped_early_marks_its_file_partial_in_the_file_and_on_stderr(plant_ssp, tmp_path):
     out = tmp_path / "r.parquet"
     process = start_simulate(plant_ssp, out, "1000", "--output-interval", "1e-3", "--progress")
-    time.sleep(5.0)
+    watch = OutputWatch(process)
+    watch.wait_for("steps/s")  # its first progress update: a first chunk of 10^4 steps is done
     process.send_signal(signal.SIGTERM)
-    stdout, stderr = process.communicate(timeout=120)
+    stdout, stderr = watch.finish()
     assert process.returncode == 143 and "Traceback" not in stderr
     assert f"{out} holds partial results, to t = " in stderr and "(partial: the run stopped early)" in stdout
     import pyarrow.parquet as pq
@@ -98,13 +100,14 @@ def test_a_partial_csv_says_so_on_its_last_line(plant_ssp, workdir):
 def test_a_second_run_on_the_same_output_is_refused_while_the_first_writes(plant_ssp, tmp_path):
     out = tmp_path / "r.csv"
     first = start_simulate(plant_ssp, out, "1000", "--output-interval", "1e-3", "--progress")
-    time.sleep(3.0)
+    watch = OutputWatch(first)
+    watch.wait_for("steps/s")  # at work, so holding the file's lock
     second = subprocess.run([sys.executable, "-m", "shapefmu", "simulate", str(plant_ssp), "--stop", "1e-3",
                              "--step", "1e-6", "--out", str(out)], capture_output=True, text=True, timeout=120)
     assert second.returncode == 2 and len(second.stderr.splitlines()) == 1
     assert f"{out} is being written by another run (process {first.pid})" in second.stderr
     first.send_signal(signal.SIGINT)
-    first.communicate(timeout=120)
+    watch.finish()
     assert first.returncode == 130  # it was still running: the refusal did not wait for it
 
 

@@ -70,14 +70,17 @@ def test_a_step_of_more_rk4_substeps_than_the_bound_is_refused(plant_fmus, tmp_p
     instance.freeInstance()
 
 
-def test_a_system_of_more_components_than_the_bound_is_refused_before_loading_any(plant_fmus):
+def test_a_system_of_more_components_than_the_bound_is_refused_before_loading_any(plant_fmus, monkeypatch):
+    import shapefmu.cosim.master
+
     system = System("crowd")
     for i in range(limits.MAX_COMPONENTS + 1):
         system.add(f"p{i}", plant_fmus["mass_spring_chain"])
-    start = time.perf_counter()
+    loaded = []
+    monkeypatch.setattr(shapefmu.cosim.master, "load_units", lambda *args: loaded.append(args))
     with pytest.raises(ValueError, match=r"system 'crowd' has 2,001 components, more than the limit of 2,000"):
         Master(system, 1e-3)
-    assert time.perf_counter() - start < 5.0  # refused before 2001 libraries were bound (minutes)
+    assert loaded == []  # refused before 2001 libraries were bound (minutes), whatever the machine's speed
 
 
 def test_a_system_past_the_compiled_loop_s_size_runs_the_python_loop_and_says_why(plant_fmus):
@@ -99,11 +102,12 @@ def test_a_python_fmu_refuses_a_step_of_minutes_of_work_at_once(ekf_fmu, capfd):
     slave.enterInitializationMode()
     slave.exitInitializationMode()
     ts = next(float(v.start) for v in description.modelVariables if v.name == "Ts")
-    start = time.perf_counter()
+    before = slave.serializeFMUstate(slave.getFMUstate())
     with pytest.raises(FMICallException):
         slave.doStep(0.0, 1e6 * ts)  # 10^6 samples of 22 us: 22 s of EKF work
-    assert time.perf_counter() - start < 1.0
     assert "per step (about a second of this FMU's work" in capfd.readouterr().out
+    # refused before its first sample (the state, its sample clock included, is as it was), on any machine
+    assert slave.serializeFMUstate(slave.getFMUstate()) == before
     slave.freeInstance()
 
 

@@ -7,6 +7,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from support.ei_definition import ei_constraint_residual
+
 from shapefmu.analysis import insensitivity, residual_vibration
 from shapefmu.shapers import (
     ImpulseShaper,
@@ -171,76 +173,6 @@ def test_undamped_insensitivity_matches_published_values(shaper, expected):
     assert abs(insensitivity(shaper(1.0, 0.0), 1.0, 0.0, 0.05).width - expected) < 0.01
 
 
-def _phasor(shaper, q, zeta):
-    """Residual phasor R(q) of a unit mode q * omega (omega = 1) after the last impulse, and dR/dq.
-
-    |R| is the percent residual vibration of paper 000 eq. 4 (a phase factor apart), written here
-    from the impulse response itself, independently of the EI solver's exponent bookkeeping.
-    """
-    t, a = np.array(shaper.times), np.array(shaper.amplitudes)
-    c = (t[-1] - t) * complex(-zeta, -math.sqrt(1.0 - zeta * zeta))
-    terms = a * np.exp(np.multiply.outer(q, c))
-    return terms.sum(axis=-1), (terms * c).sum(axis=-1), (terms * c * c).sum(axis=-1)
-
-
-def _check_ei_shape(shaper, humps, zeta, vtol):
-    """The EI definition checked on the impulses alone; returns the largest constraint residual.
-
-    Dense evaluation of V (shapefmu.analysis.residual_vibration) finds the humps (local maxima
-    that reach vtol) and the deepest minima between and beyond them; golden section refines each
-    peak and Gauss-Newton each zero on R(q) = 0, both on this module's own formula for R.
-    """
-    assert min(shaper.amplitudes) > 0
-    assert shaper.times[0] == 0.0 and all(b > a for a, b in zip(shaper.times, shaper.times[1:]))
-    q = np.arange(0.05, 52.0, 2e-3)
-    v = residual_vibration(shaper, q, zeta)
-    inner = (v[1:-1] > v[:-2]) & (v[1:-1] >= v[2:])
-    candidates = np.nonzero(inner & (v[1:-1] > vtol / 2))[0] + 1
-    # Golden-section search of every peak inside its two grid cells, all peaks at once.
-    low, high = q[candidates - 1], q[candidates + 1]
-    ratio = (math.sqrt(5.0) - 1.0) / 2.0
-    for _ in range(80):
-        c, d = high - ratio * (high - low), low + ratio * (high - low)
-        left = np.abs(_phasor(shaper, c, zeta)[0]) > np.abs(_phasor(shaper, d, zeta)[0])
-        high, low = np.where(left, d, high), np.where(left, low, c)
-    peak_q = (low + high) / 2
-    for _ in range(3):  # then Newton on d|R|^2/dq = 0, which golden section leaves at ~1e-8
-        r, r1, r2 = _phasor(shaper, peak_q, zeta)
-        with np.errstate(all="ignore"):  # a flat plateau far out may give 0/0: keep golden's
-            newton = peak_q - (np.conj(r) * r1).real / (np.abs(r1) ** 2 + (np.conj(r) * r2).real)
-        peak_q = np.where(np.abs(newton - peak_q) < 1e-6, newton, peak_q)
-    heights = np.abs(_phasor(shaper, peak_q, zeta)[0])
-    # Peaks that reach vtol; the N nearest q = 1 are the humps (undamped, the pattern repeats).
-    tall = np.nonzero(heights > vtol * (1 - 1e-6))[0]
-    nearest = np.sort(np.argsort(np.abs(peak_q[tall] - 1.0))[:humps])
-    assert len(nearest) == humps and np.all(np.diff(nearest) == 1)
-    peaks = candidates[tall[nearest]]
-    hump_q = list(peak_q[tall[nearest]])
-    residuals = [abs(sum(shaper.amplitudes) - 1.0)]
-    residuals += [abs(h**2 - vtol**2) for h in heights[tall[nearest]]]
-    before = candidates[tall[nearest[0] - 1]] if nearest[0] > 0 else 0
-    after = candidates[tall[nearest[-1] + 1]] if nearest[-1] + 1 < len(tall) else len(q) - 1
-    # One zero below, between and above the humps: the deepest grid minimum in each gap, the outer
-    # gaps reaching to the next peak that reaches vtol (or the end of the grid).
-    edges = [before, *peaks, after]
-    zero_q = []
-    for lo, hi in zip(edges, edges[1:]):
-        x = q[lo + int(np.argmin(v[lo : hi + 1]))]
-        for _ in range(40):  # Gauss-Newton on the complex equation R(q) = 0 in real q
-            r, r1, _ = _phasor(shaper, x, zeta)
-            x -= (np.conj(r1) * r).real / abs(r1) ** 2
-        r = _phasor(shaper, x, zeta)[0]
-        residuals += [abs(r.real), abs(r.imag)]
-        zero_q.append(x)
-    middle = sorted(hump_q + zero_q)[humps]
-    assert abs(middle - 1.0) < 1e-9  # the design frequency sits on the middle hump or zero
-    # Between the outermost zeros V never exceeds vtol.
-    band = (q >= zero_q[0]) & (q <= zero_q[-1])
-    assert v[band].max() <= vtol * (1 + 1e-9)
-    assert np.all(heights[(peak_q >= zero_q[0]) & (peak_q <= zero_q[-1])] <= vtol * (1 + 1e-9))
-    return max(residuals)
-
-
 # zeta up to 0.3, the edges of the measured domain at zeta = 0.3 (runtime/ei.py: one-hump every
 # vtol in [1e-4, 0.25], two-hump vtol <= 0.1396, three-hump vtol <= 0.0596), and the three-hump
 # fold region (vtol 0.03 to 0.05, zeta 0.26 to 0.3).
@@ -253,7 +185,7 @@ EI_GRID = EDGES + [(h, z, 0.05) for h in (1, 2, 3) for z in (0.0, 0.1, 0.2, 0.3)
 @pytest.mark.parametrize("humps, zeta, vtol", EI_GRID)
 def test_ei_design_meets_its_constraints_to_rounding(humps, zeta, vtol):
     shaper = EI_FAMILY[humps - 1](1.0, zeta, vtol)
-    assert _check_ei_shape(shaper, humps, zeta, vtol) < 1e-12
+    assert ei_constraint_residual(shaper, humps, zeta, vtol) < 1e-12
 
 
 def test_three_hump_ei_is_the_continuous_deformation_up_to_its_first_fold():
@@ -278,7 +210,7 @@ def test_three_hump_ei_beyond_its_existence_domain_says_where_the_branch_ends():
     # The stated end is true: just below it the design exists and meets its constraints, just
     # above it is refused.
     shaper = ei3(1.0, end - 0.002, 0.08)
-    assert _check_ei_shape(shaper, 3, end - 0.002, 0.08) < 1e-12
+    assert ei_constraint_residual(shaper, 3, end - 0.002, 0.08) < 1e-12
     with pytest.raises(ValueError):
         ei3(1.0, end + 0.002, 0.08)
 
@@ -381,7 +313,7 @@ def test_property_ei_shapers(omega, zeta, vtol, kind):
     assert abs(residual_vibration(shaper, omega, zeta) - expected) < 1e-9
     humps = {"ei": 1, "ei2": 2, "ei3": 3}[kind]
     dimensionless = ImpulseShaper(tuple(t * omega for t in shaper.times), shaper.amplitudes)
-    assert _check_ei_shape(dimensionless, humps, zeta, vtol) < 1e-12
+    assert ei_constraint_residual(dimensionless, humps, zeta, vtol) < 1e-12
 
 
 @settings(max_examples=10, deadline=None)

@@ -17,6 +17,7 @@ LAYERS = {
     "runtime": 0,
     "shapers": 1, "analysis": 1, "estimation": 1, "stos": 1, "optimal": 1, "plants": 1, "plots": 1, "identification": 1,
     "motion": 1,
+    "files": 1,
     "fmi": 2,
     "cosim": 3,
     "sweep": 4,

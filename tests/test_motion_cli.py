@@ -18,7 +18,9 @@ EXAMPLE = ["motion", "plan", "--axis", "x:0:0.01:0.3:5:2000", "--mode", "40:0.05
 def test_the_40_hz_example_is_printed_beside_ruckig(capsys, tmp_path):
     out = tmp_path / "traj.csv"
     assert main([*EXAMPLE, "--json", "--out", str(out), "--ts", "1e-3"]) == 0
-    record = json.loads(capsys.readouterr().out)
+    printed = capsys.readouterr()
+    record = json.loads(printed.out)  # stdout holds the JSON alone; the file written is said on stderr
+    assert f"written to {out}" in printed.err
     peer = ruckig_trajectory([(0.0, 0.0, 0.0)], [(0.01, 0.0, 0.0)], [Limits(0.3, 5.0, 2000.0)]).duration
     assert record["ruckig_duration"] == pytest.approx(peer, rel=1e-12)
     assert record["rigid_duration"] == pytest.approx(peer, rel=1e-9)

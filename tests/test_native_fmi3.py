@@ -16,16 +16,17 @@ is built from the same start values as FMI 2.0 and as FMI 3.0. The second opinio
 from __future__ import annotations
 
 import subprocess
-from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
 import pytest
-from c_host import fmu_arguments, host_rows, run_host
-from fixtures_native import FILTERS, ONE_MODE, TWO_MODES, shaper_starts
 
-HEADERS = Path(__file__).parent.parent / "src" / "shapefmu" / "fmi" / "native" / "c"
-HOST3 = Path(__file__).parent / "hosts_c" / "fmi3_host.c"
+from support import HOSTS_C, MODELS
+from support.c_hosts import fmi3_arguments, fmu_arguments, host_rows, run_host
+from support.cross_platform import PLATFORMS, missing_tools, windows_path
+from support.fixtures_native import FILTERS, ONE_MODE, TWO_MODES, shaper_starts
+from support.valgrind import assert_clean_under_memcheck, requires_valgrind
+
 STOP = 0.5
 
 # name -> (twin model name, start values, stop time): every kind of native FMU.
@@ -43,33 +44,19 @@ CASES = {
 ARRAY_SETS = {"shaper zvd": ("f", 1, 14.5), "filter hanning2": ("tap", 3, 0.125), "plant": ("f", 1, 2100.0)}
 
 
-def _build(name, version, folder):
-    from shapefmu.fmi.native import build_plant_fmu
-    from shapefmu.fmi.native.twins import build_native
-
-    path = folder / f"{name.replace(' ', '_').replace(':', '_')}_{version[0]}.fmu"
+def _job(name, version, clock=False):
     if name == "plant":
-        return build_plant_fmu("models/disk_drive.toml", path, fmi_version=version)
+        return "plant", (MODELS / "disk_drive.toml",), {"fmi_version": version}
     model, starts, _ = CASES[name]
-    return build_native(model, path, fmi_version=version, **starts)
+    return "native", (model,), {"fmi_version": version, "clock": clock, **starts}
 
 
 @pytest.fixture(scope="module")
-def twins(tmp_path_factory):
+def twins(builds):
     """{name: (FMI 2.0 FMU, FMI 3.0 FMU)} of every case and the disk-drive plant."""
-    folder = tmp_path_factory.mktemp("fmi3_twins")
     names = [*CASES, "plant"]
-    with ThreadPoolExecutor(2) as pool:
-        jobs = {(n, v): pool.submit(_build, n, v, folder) for n in names for v in ("2.0", "3.0")}
-        return {n: (jobs[(n, "2.0")].result(), jobs[(n, "3.0")].result()) for n in names}
-
-
-@pytest.fixture(scope="module")
-def fmi3_host(tmp_path_factory) -> Path:
-    program = tmp_path_factory.mktemp("fmi3_host") / "fmi3_host"
-    subprocess.run(["gcc", "-O2", "-Wall", "-Wextra", "-Werror", "-I", str(HEADERS), "-o", str(program), str(HOST3),
-                    "-ldl", "-lm"], check=True, capture_output=True, text=True)
-    return program
+    paths = builds.many({(n, v): _job(n, v) for n in names for v in ("2.0", "3.0")})
+    return {n: (paths[(n, "2.0")], paths[(n, "3.0")]) for n in names}
 
 
 def _variables(fmu):
@@ -145,18 +132,6 @@ def test_fmpy_runs_the_fmi3_fmu_as_its_fmi2_twin(twins, name, interface):
     assert moving, "no output moved: the comparison would prove nothing"
 
 
-def _host3_arguments(fmu3, folder):
-    from fmpy import extract, read_model_description
-
-    md = read_model_description(str(fmu3))
-    directory = extract(str(fmu3), str(folder))
-    scalars = [v for v in md.modelVariables if not v.dimensions and v.type == "Float64"]
-    inputs = [v.valueReference for v in scalars if v.causality == "input"]
-    outputs = [v.valueReference for v in scalars if v.causality == "output"]
-    return ["--fmu", str(Path(directory).resolve()), md.coSimulation.modelIdentifier, md.instantiationToken,
-            ",".join(map(str, inputs)) or "-", ",".join(map(str, outputs)) or "-"]
-
-
 def _sets(name, fmu2, fmu3):
     """The hosts' --set-real (FMI 2.0) and --set (FMI 3.0) options of the case's array set."""
     starts2, starts3 = _array_set(name, fmu2)
@@ -177,7 +152,7 @@ def test_c_hosts_keeping_time_as_t_plus_h_see_the_fmi3_fmu_as_its_twin(twins, c_
                    "--teardown", "atexit", "--csv", tmp_path / "two.csv")
     assert two.returncode == 0, two.stderr[-2000:]
     three = subprocess.run([str(fmi3_host), *map(str, stepping), *set3, "--teardown", "atexit", "--csv",
-                            str(tmp_path / "three.csv"), *_host3_arguments(fmu3, tmp_path / "three")],
+                            str(tmp_path / "three.csv"), *fmi3_arguments(fmu3, tmp_path / "three")],
                            capture_output=True, text=True, timeout=300)
     assert three.returncode == 0 and "exit handler: atexit done" in three.stderr, three.stderr[-2000:]
     rows2, rows3 = host_rows(tmp_path / "two.csv")[(0, 0, 0)], host_rows(tmp_path / "three.csv")[(0, 0, 0)]
@@ -189,21 +164,16 @@ def test_c_hosts_keeping_time_as_t_plus_h_see_the_fmi3_fmu_as_its_twin(twins, c_
     assert np.ptp(rows2[:, 1:], axis=0).max() > 0
 
 
+@pytest.mark.foreign
+@requires_valgrind
 @pytest.mark.parametrize("name", ["shaper zvd", "filter hanning2", "ekf tuner", "stos controller", "reference player",
                                   "profile generator", "plant"])
 def test_the_fmi3_host_under_valgrind_finds_no_error_and_no_leak(twins, fmi3_host, tmp_path, name):
-    _, fmu3 = twins[name]
-    fmu2 = twins[name][0]
+    fmu2, fmu3 = twins[name]
     _, set3 = _sets(name, fmu2, fmu3)
     for teardown in ("normal", "atexit"):
-        completed = subprocess.run(
-            ["valgrind", "--tool=memcheck", "--leak-check=full", "--show-leak-kinds=definite,indirect,possible",
-             "--errors-for-leak-kinds=definite,indirect,possible", "--error-exitcode=99", str(fmi3_host),
-             "--stop", "0.05", "--steps", "50", *set3, "--teardown", teardown,
-             *_host3_arguments(fmu3, tmp_path / teardown)],
-            capture_output=True, text=True, timeout=300)
-        assert completed.returncode == 0, completed.stderr[-3000:]
-        assert "ERROR SUMMARY: 0 errors" in completed.stderr
+        assert_clean_under_memcheck([fmi3_host, "--stop", "0.05", "--steps", "50", *set3, "--teardown", teardown,
+                                     *fmi3_arguments(fmu3, tmp_path / teardown)])
 
 
 @pytest.mark.parametrize("name", [*CASES, "plant"])
@@ -260,20 +230,9 @@ SAMPLED = [name for name in CASES if name != "reference player"]
 
 
 @pytest.fixture(scope="module")
-def clocked(tmp_path_factory):
+def clocked(builds):
     """{name: FMI 3.0 FMU built with --clock} of every sampled case."""
-    from shapefmu.fmi.native.twins import build_native
-
-    folder = tmp_path_factory.mktemp("fmi3_clocked")
-
-    def build(name):
-        model, starts, _ = CASES[name]
-        return build_native(model, folder / f"{name.replace(' ', '_').replace(':', '_')}.fmu", fmi_version="3.0",
-                            clock=True, **starts)
-
-    with ThreadPoolExecutor(2) as pool:
-        jobs = {name: pool.submit(build, name) for name in SAMPLED}
-        return {name: job.result() for name, job in jobs.items()}
+    return builds.many({name: _job(name, "3.0", clock=True) for name in SAMPLED})
 
 
 def _clock(fmu):
@@ -322,7 +281,7 @@ def test_a_host_ticking_the_clock_sees_the_clocked_fmu_as_the_fmi2_twin(twins, c
     assert two.returncode == 0, two.stderr[-2000:]
     three = subprocess.run([str(fmi3_host), "--stop", str(STOP), "--steps", str(steps), "--clock",
                             str(_clock(fmu3).valueReference), repr(ts), "--teardown", "atexit", "--csv",
-                            str(tmp_path / "three.csv"), *_host3_arguments(fmu3, tmp_path / "three")],
+                            str(tmp_path / "three.csv"), *fmi3_arguments(fmu3, tmp_path / "three")],
                            capture_output=True, text=True, timeout=300)
     assert three.returncode == 0 and "exit handler: atexit done" in three.stderr, three.stderr[-2000:]
     rows2, rows3 = host_rows(tmp_path / "two.csv")[(0, 0, 0)], host_rows(tmp_path / "three.csv")[(0, 0, 0)]
@@ -406,16 +365,13 @@ def test_clock_builds_are_refused_where_no_clock_can_tick(tmp_path):
     assert not list(tmp_path.iterdir())
 
 
+@pytest.mark.foreign
+@requires_valgrind
 @pytest.mark.parametrize("name", ["shaper zvd", "ekf tuner", "profile generator"])
 def test_a_clocked_fmu_under_valgrind_finds_no_error_and_no_leak(clocked, fmi3_host, tmp_path, name):
     fmu = clocked[name]
-    completed = subprocess.run(
-        ["valgrind", "--tool=memcheck", "--leak-check=full", "--show-leak-kinds=definite,indirect,possible",
-         "--errors-for-leak-kinds=definite,indirect,possible", "--error-exitcode=99", str(fmi3_host),
-         "--stop", "0.05", "--steps", "100", "--clock", str(_clock(fmu).valueReference), repr(_interval(fmu)),
-         "--teardown", "atexit", *_host3_arguments(fmu, tmp_path)], capture_output=True, text=True, timeout=300)
-    assert completed.returncode == 0, completed.stderr[-3000:]
-    assert "ERROR SUMMARY: 0 errors" in completed.stderr
+    assert_clean_under_memcheck([fmi3_host, "--stop", "0.05", "--steps", "100", "--clock", _clock(fmu).valueReference,
+                                 repr(_interval(fmu)), "--teardown", "atexit", *fmi3_arguments(fmu, tmp_path)])
 
 
 # ---------------------------------------------------------------- our master
@@ -425,11 +381,9 @@ SOURCE_TABLE = ('{"kind": "signal_table", "interpolation": "hold", "time": [0, 0
 
 
 @pytest.fixture(scope="module")
-def source(tmp_path_factory):
+def source(builds):
     """A native FMI 2.0 ReferencePlayer playing steps, to drive every input of a case."""
-    from shapefmu.fmi.native.twins import build_native
-
-    return build_native("ReferencePlayer", tmp_path_factory.mktemp("source") / "Source.fmu", table=SOURCE_TABLE)
+    return builds.native("ReferencePlayer", table=SOURCE_TABLE)
 
 
 def _master_run(source, fmu, step, stop):
@@ -545,46 +499,33 @@ def test_our_master_runs_the_unsampled_fmi3_fmus_as_their_fmi2_twins(twins, sour
 
 # ---------------------------------------------------------------- Windows and ARM
 
+@pytest.mark.foreign
 @pytest.mark.parametrize("platform", ["aarch64-linux", "x86_64-windows"])
-def test_the_fmi3_libraries_for_windows_and_arm_run_as_the_linux_one(twins, clocked, tmp_path, platform):
+def test_the_fmi3_libraries_for_windows_and_arm_run_as_the_linux_one(twins, clocked, cross_hosts, tmp_path, platform):
     """hosts_c/fmi3_host.c cross-compiled (mingw-w64 for Windows, run under Wine; gcc-aarch64 for ARM,
     under qemu) loads each FMI 3.0 FMU's library for its platform and prints the x86_64-linux rows
     (1e-12 of their scale): every kind, a clocked one too."""
     from fmpy import read_model_description
 
-    from shapefmu.fmi.native.compile import AARCH64, MINGW
-
-    if platform == "aarch64-linux":
-        from test_native_aarch64 import ARM_ROOT, QEMU, missing_tools
-    else:
-        from test_native_win64 import missing_tools, run_wine
-    reason = missing_tools()
+    host_platform = "win64" if platform == "x86_64-windows" else platform  # plan-host platform names
+    reason = missing_tools(host_platform)
     if reason:
         pytest.skip(reason)
-    compiler, suffix = (AARCH64, ".so") if platform == "aarch64-linux" else (MINGW, ".dll")
-    linux, cross = tmp_path / "fmi3_host", tmp_path / f"fmi3_host_cross{'.exe' if suffix == '.dll' else ''}"
-    subprocess.run(["gcc", "-O2", "-I", str(HEADERS), str(HOST3), "-o", str(linux), "-ldl", "-lm"], check=True)
-    subprocess.run([compiler, "-O2", "-I", str(HEADERS), str(HOST3), "-o", str(cross),
-                    *(["-ldl", "-lm"] if suffix == ".so" else ["-static-libgcc"])], check=True)
-    windows = (lambda path: "Z:" + str(path).replace("/", "\\")) if suffix == ".dll" else str
+    linux, cross = (cross_hosts.host(HOSTS_C / "fmi3_host.c", name) for name in ("linux64", host_platform))
+    windows = windows_path if host_platform == "win64" else str
     fmus = {**{name: pair[1] for name, pair in twins.items()}, "clocked shaper": clocked["shaper zvd"]}
     for name, fmu in fmus.items():
         folder = tmp_path / name.replace(" ", "_").replace(":", "_")
-        arguments = _host3_arguments(fmu, folder)
+        arguments = fmi3_arguments(fmu, folder)
         identifier = read_model_description(str(fmu)).coSimulation.modelIdentifier
-        library = Path(arguments[1]) / "binaries" / platform / f"{identifier}{suffix}"
+        library = Path(arguments[1]) / "binaries" / platform / f"{identifier}{PLATFORMS[host_platform][2]}"
         clock = ["--clock", str(_clock(fmu).valueReference), repr(_interval(fmu))] if name == "clocked shaper" else []
         options = ["--stop", "0.2", "--steps", "200", *clock, "--teardown", "atexit"]
-        native = subprocess.run([str(linux), *options, "--csv", str(folder / "linux.csv"), *arguments],
-                                capture_output=True, text=True, timeout=300)
+        native = cross_hosts.run("linux64", linux, [*options, "--csv", folder / "linux.csv", *arguments])
         assert native.returncode == 0, native.stderr[-2000:]
         foreign = [*options, "--library", windows(library), "--csv", windows(folder / "cross.csv"), arguments[0],
                    windows(arguments[1]), *arguments[2:]]
-        if suffix == ".dll":
-            completed = run_wine(cross, foreign, tmp_path)
-        else:
-            completed = subprocess.run([QEMU, "-L", ARM_ROOT, str(cross), *foreign], capture_output=True, text=True,
-                                       timeout=300)
+        completed = cross_hosts.run(host_platform, cross, foreign)
         assert completed.returncode == 0 and "atexit done" in completed.stderr, (name, completed.stderr[-2000:])
         reference, rows = host_rows(folder / "linux.csv")[(0, 0, 0)], host_rows(folder / "cross.csv")[(0, 0, 0)]
         assert reference.shape == rows.shape and reference.shape[0] > 200, name

@@ -7,11 +7,13 @@ import random
 
 import numpy as np
 import pytest
-from fixtures_fmi import command_signal
-from fixtures_native import BUILD_TIME_ONLY, CLOSED_FORM, H, ONE_MODE, TWO_MODES, shaper_starts
 from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
-from fmu_drivers import assert_state_restores_exactly, configured, initialised, run_ecos, run_fmpy, run_libcosim
+
+from support.fixtures_fmi import command_signal
+from support.fixtures_native import BUILD_TIME_ONLY, CLOSED_FORM, H, ONE_MODE, TWO_MODES, shaper_starts
+from support.fmpy_slaves import assert_state_restores_exactly, configured, initialised, y_after_each_set
+from support.hosts import run_ecos, run_fmpy, run_libcosim, y_of_u
 
 from shapefmu.shapers import design
 
@@ -36,16 +38,11 @@ def fir(taps, samples, u0):
 
 def read_after_set(path, commands, steps, parameters=None):
     """At each communication point set u, read y (feed-through), then step; steps[k] is step k's size."""
-    slave, vr = initialised(path, parameters)
-    t, out = 0.0, []
-    for u, h in zip(commands, steps):
-        slave.setReal([vr["u"]], [u])
-        out.append(slave.getReal([vr["y"]])[0])
-        slave.doStep(t, h)
+    t, points = 0.0, []
+    for h in steps:
+        points.append((t, h))
         t += h  # a host's drifting time, as most hosts keep it
-    slave.terminate()
-    slave.freeInstance()
-    return np.array(out)
+    return np.array(y_after_each_set(path, commands, points, parameters))
 
 
 def newest_sample(tau, ts):
@@ -111,11 +108,9 @@ def test_native_shaper_equals_the_pythonfmu_shaper_and_the_design_layer(native_s
 
 
 @pytest.fixture(scope="module")
-def shaper_fmu_default(tmp_path_factory):
+def shaper_fmu_default(builds):
     """One pythonfmu Shaper: it designs from the parameters set before initialisation."""
-    from shapefmu.fmi import build_fmu
-
-    return build_fmu("Shaper", tmp_path_factory.mktemp("py_shaper") / "Shaper.fmu")
+    return builds.pythonfmu("Shaper")
 
 
 @pytest.mark.parametrize("kind", ["zvd", "ei2", "simultaneous"])
@@ -139,11 +134,10 @@ def test_closed_form_redesign_in_c_follows_new_modes(native_shapers):
     np.testing.assert_allclose(out, fir(design_taps(values), commands, values["u0"]), rtol=0, atol=1e-12)
 
 
-def test_filters_equal_the_pythonfmu_filter_and_their_taps(native_filters, tmp_path):
-    from shapefmu.fmi import build_fmu
+def test_filters_equal_the_pythonfmu_filter_and_their_taps(native_filters, builds):
     from shapefmu.fmi.python.slaves.shape_filter import design_taps as filter_taps
 
-    python = build_fmu("ShapeFilter", tmp_path / "ShapeFilter.fmu", kind="rectangle")  # declares feed-through: runs every kind
+    python = builds.pythonfmu("ShapeFilter", kind="rectangle")  # declares feed-through: runs every kind
     for name, (path, starts) in native_filters.items():
         taps, ts = filter_taps({**default_filter_values(), **starts})
         commands = np.array(command_signal(2 * len(taps) + 50))
@@ -166,8 +160,8 @@ def default_filter_values():
 def test_outputs_identical_in_fmpy_libcosim_and_ecos(native_shapers, native_filters, quiet_libcosim):
     commands = command_signal(150)
     for path in (native_shapers[("simultaneous", 2)][0], native_filters["rectangle"][0]):
-        reference = run_fmpy(path, commands, H)
-        for other in (run_libcosim(path, commands, H), run_ecos(path, commands, H)):
+        reference = y_of_u(run_fmpy, path, commands, H)
+        for other in (y_of_u(run_libcosim, path, commands, H), y_of_u(run_ecos, path, commands, H)):
             np.testing.assert_allclose(other, reference, rtol=0, atol=1e-12)
 
 
@@ -177,7 +171,7 @@ def test_steps_off_the_grid_give_the_spec_reference_in_fmpy_libcosim_and_ecos(na
     h = 0.7 * H  # a whole number of nanoseconds (libcosim), on the grid every tenth step
     expected = spec_reference(design_taps(starts), commands, np.full(len(commands), h), starts["u0"], "after_step")
     for run in (run_fmpy, run_libcosim, run_ecos):
-        np.testing.assert_allclose(run(path, commands, h), expected, rtol=0, atol=1e-12, err_msg=run.__name__)
+        np.testing.assert_allclose(y_of_u(run, path, commands, h), expected, rtol=0, atol=1e-12, err_msg=run.__name__)
 
 
 def test_cli_builds_a_native_shaper_and_without_mingw_a_linux64_one_with_a_note(tmp_path, monkeypatch, capsys):

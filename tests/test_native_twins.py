@@ -20,7 +20,7 @@ def test_the_command_line_builds_the_ekf_tuner_and_every_twin(tmp_path, monkeypa
     assert "sources/ekf_tuner_fmi2.c" in zipfile.ZipFile(out).namelist()
     code, _, err = guarded(["build", "ekf-tuner", "--native", "--omega0", "-5", "-o", out])
     assert code == 2 and err.count("\n") == 1 and "omega0 must be > 0" in err, err
-    monkeypatch.setattr(native, "build_all", lambda models, folder, fmi_version: [])  # the plants have their own tests
+    monkeypatch.setattr(native, "build_all", lambda models, folder, fmi_version, progress=None: [])  # the plants have their own tests
     code, text, err = guarded(["build", "--native", "-o", tmp_path / "all"], seconds=300)
     assert code == 0, err
     for name in TWINS:

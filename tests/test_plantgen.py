@@ -14,7 +14,7 @@ import shutil
 import numpy as np
 import pytest
 import scipy.linalg
-from fixtures_plants import LINEAR_PLANTS, MODELS
+from support.fixtures_plants import LINEAR_PLANTS, MODELS, SCHEDULED_PLANTS
 from fmpy import extract, read_model_description, simulate_fmu
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Model, FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, fmi2Error
@@ -137,7 +137,7 @@ def run_steps(instance, outputs, steps, input_name=None, inputs=None, t0=0.0):
 # ------------------------------------------------------------------------------------------ validity
 
 def test_every_plant_of_models_is_built(plant_fmus):
-    assert set(plant_fmus) == {*LINEAR_PLANTS, "pendulum"}
+    assert set(plant_fmus) == {*LINEAR_PLANTS, *SCHEDULED_PLANTS, "pendulum"}
 
 
 @pytest.mark.parametrize("name", [*LINEAR_PLANTS, "pendulum"])

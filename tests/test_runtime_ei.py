@@ -2,7 +2,7 @@
 
 runtime/ei.py is the one implementation: a Shaper FMU runs it and the design layer (shapers/ei.py)
 returns its impulses. The independent reference is the definition itself, checked on the impulses
-alone by ``_check_ei_shape`` of test_impulse_shapers.py (numpy: humps of height exactly vtol, the
+alone by ``ei_constraint_residual`` (tests/support/ei_definition.py) (numpy: humps of height exactly vtol, the
 zeros between and beyond them, the design frequency on the middle element, V <= vtol between the
 outermost zeros), and the measured domain stated in the runtime/ei.py docstring.
 """
@@ -11,7 +11,8 @@ import importlib
 
 import numpy as np
 import pytest
-from test_impulse_shapers import _check_ei_shape
+
+from support.ei_definition import ei_constraint_residual
 
 from shapefmu.shapers import ImpulseShaper
 
@@ -46,7 +47,7 @@ def _constraint_residual(kind, vtol, zeta):
     times, amplitudes = getattr(runtime_ei, kind)(OMEGA, zeta, vtol)
     assert len(times) == len(amplitudes) == HUMPS[kind] + 2
     dimensionless = ImpulseShaper(tuple(t * OMEGA for t in times), tuple(amplitudes))
-    return _check_ei_shape(dimensionless, HUMPS[kind], zeta, vtol)
+    return ei_constraint_residual(dimensionless, HUMPS[kind], zeta, vtol)
 
 
 @pytest.mark.parametrize("kind, vtol, zeta", GRID)

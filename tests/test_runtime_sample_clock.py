@@ -1,4 +1,4 @@
-"""runtime/sample_clock.py: samples at t0 + k Ts whatever the steps, per the spec in its docstring."""
+"""runtime/sample_clock.py: samples at t0 + k Ts whatever the steps, counted from them, per the spec in its docstring."""
 
 import pytest
 
@@ -24,14 +24,14 @@ def _steps(clock, steps, inputs):
      (0.5 * TS, 3, False), (TS - 1.5 * DELTA, 3, False), (TS - 0.5 * DELTA, 4, True)],
 )
 def test_a_sample_instant_counts_as_reached_within_the_tolerance(offset, index, on_grid):
-    clock = SampleClock(TS, T0)
-    tau = T0 + 3 * TS + offset
-    assert clock.index(tau) == index
-    assert clock.on_grid(tau, clock.index(tau)) is on_grid
+    clock = SampleClock(TS)
+    clock.advance(T0, 3 * TS + offset, 0.0, lambda v: None)
+    assert clock.k == index
+    assert (clock.since == 0.0) is on_grid
 
 
 def test_whole_sample_steps_commit_each_sample_once_with_the_input_set_before_the_step():
-    clock = SampleClock(TS, T0)
+    clock = SampleClock(TS)
     t, steps = T0, []
     for m in (1, 3, 1, 2):
         steps.append((t, m * TS))
@@ -43,7 +43,7 @@ def test_whole_sample_steps_commit_each_sample_once_with_the_input_set_before_th
 
 
 def test_between_samples_the_input_is_latched_and_a_new_one_waits_for_the_next_sample():
-    clock = SampleClock(TS, 0.0)
+    clock = SampleClock(TS)
     committed = []
     # 0 -> 1.5 Ts with u = 1: sample 0 committed with 1; sample 1 (at Ts) reached and latched with 1.
     assert clock.advance(0.0, 1.5 * TS, 1.0, committed.append) == 1.0
@@ -57,7 +57,7 @@ def test_between_samples_the_input_is_latched_and_a_new_one_waits_for_the_next_s
 
 
 def test_a_step_of_1e_16_s_on_a_sample_instant_keeps_the_sample_open():
-    clock = SampleClock(TS, 2.0)
+    clock = SampleClock(TS)
     committed = []
     assert clock.advance(2.0, 1e-16, 7.0, committed.append) == 7.0
     assert (committed, clock.k, clock.latched) == ([], 0, False)
@@ -65,7 +65,7 @@ def test_a_step_of_1e_16_s_on_a_sample_instant_keeps_the_sample_open():
 
 
 def test_a_host_drifting_as_t_plus_h_takes_one_sample_per_step_for_1e5_steps():
-    clock = SampleClock(TS, 0.0)
+    clock = SampleClock(TS)
     t, counts = 0.0, set()
     for _ in range(100_000):
         committed = []
@@ -78,7 +78,7 @@ def test_a_host_drifting_as_t_plus_h_takes_one_sample_per_step_for_1e5_steps():
 
 @pytest.mark.parametrize("h", [1e300, float("inf"), (MAX_SAMPLES_PER_STEP + 1) * TS])
 def test_a_step_over_more_samples_than_the_bound_is_refused_and_changes_nothing(h):
-    clock = SampleClock(TS, 0.0)
+    clock = SampleClock(TS)
     clock.advance(0.0, 0.5 * TS, 3.0, lambda v: None)
     before = dict(vars(clock))
     committed = []
@@ -88,7 +88,7 @@ def test_a_step_over_more_samples_than_the_bound_is_refused_and_changes_nothing(
 
 
 def test_the_clock_state_survives_the_fmu_state_codec_exactly():
-    clock = SampleClock(TS, 0.1)
+    clock = SampleClock(TS)
     clock.advance(0.1, 2.5 * TS, (1.0, -2.0, 0.1), lambda v: None)
     allowed = {"SampleClock": SampleClock}
     raw = state_codec.to_bytes(state_codec.encode(clock, allowed))

@@ -5,7 +5,7 @@ from __future__ import annotations
 import zipfile
 
 import pytest
-from cosim_support import build_test_fmu
+from support.cosim_fmus import build_test_fmu
 
 from shapefmu.fmi.ssp import System, read_ssp, read_ssv, write_ssv
 
@@ -40,14 +40,18 @@ def test_ssv_values_round_trip_with_their_types(tmp_path):
     assert read_ssv(write_ssv(tmp_path / "p.ssv", values)) == values
 
 
+def edited_pair(fmus, folder, old: str, new: str):
+    """The two-component system written as an .ssd whose first ``old`` is replaced by ``new``."""
+    ssd = two(fmus).write_ssd(folder / "pair.ssd")
+    ssd.write_text(ssd.read_text().replace(old, new, 1))
+    return ssd
+
+
 def test_unknown_annotations_are_kept_and_ignored(fmus, tmp_path):
-    ssd = two(fmus).write_ssd(tmp_path / "pair.ssd")
-    text = ssd.read_text().replace(
-        "</ssd:SystemStructureDescription>",
-        '<ssd:Annotations><ssc:Annotation type="com.opensimulationplatform"><osp:Algorithm xmlns:osp="urn:osp">'
-        '<osp:FixedStepAlgorithm baseStepSize="1e-4"/></osp:Algorithm></ssc:Annotation></ssd:Annotations>'
-        "</ssd:SystemStructureDescription>")
-    ssd.write_text(text)
+    ssd = edited_pair(fmus, tmp_path, "</ssd:SystemStructureDescription>",
+                      '<ssd:Annotations><ssc:Annotation type="com.opensimulationplatform"><osp:Algorithm xmlns:osp="urn:osp">'
+                      '<osp:FixedStepAlgorithm baseStepSize="1e-4"/></osp:Algorithm></ssc:Annotation></ssd:Annotations>'
+                      "</ssd:SystemStructureDescription>")
     system = read_ssp(ssd)
     assert len(system.components) == 2
     again = system.write_ssd(tmp_path / "again.ssd").read_text()
@@ -55,13 +59,10 @@ def test_unknown_annotations_are_kept_and_ignored(fmus, tmp_path):
 
 
 def test_system_level_binding_with_component_prefixed_names(fmus, tmp_path):
-    ssd = two(fmus).write_ssd(tmp_path / "pair.ssd")
-    text = ssd.read_text().replace(
-        "<ssd:Elements>",
-        '<ssd:ParameterBindings><ssd:ParameterBinding><ssd:ParameterValues><ssv:ParameterSet version="1.0" name="p">'
-        '<ssv:Parameters><ssv:Parameter name="gain.c"><ssv:Real value="0.75"/></ssv:Parameter></ssv:Parameters>'
-        "</ssv:ParameterSet></ssd:ParameterValues></ssd:ParameterBinding></ssd:ParameterBindings><ssd:Elements>", 1)
-    ssd.write_text(text)
+    ssd = edited_pair(fmus, tmp_path, "<ssd:Elements>",
+                      '<ssd:ParameterBindings><ssd:ParameterBinding><ssd:ParameterValues><ssv:ParameterSet version="1.0" name="p">'
+                      '<ssv:Parameters><ssv:Parameter name="gain.c"><ssv:Real value="0.75"/></ssv:Parameter></ssv:Parameters>'
+                      "</ssv:ParameterSet></ssd:ParameterValues></ssd:ParameterBinding></ssd:ParameterBindings><ssd:Elements>")
     assert read_ssp(ssd).parameter_values("gain") == {"k": -3.0, "c": 0.75}
 
 

@@ -13,7 +13,7 @@ import numpy as np
 import pyssp_standard as pyssp
 import pytest
 import xmlschema
-from c_fmus import build_typed_stair
+from support.c_fmus import build_typed_stair
 
 from shapefmu.fmi.ssp import System, read_ssp, write_ssv
 from shapefmu.plants.shipped import SYSTEM_SUFFIXES, shipped

@@ -7,7 +7,7 @@ import zipfile
 
 import numpy as np
 import pytest
-from c_fmus import build_typed_stair
+from support.c_fmus import build_typed_stair
 
 from shapefmu.cosim import simulate
 from shapefmu.fmi.ssp import System, read_ssp, write_ssv

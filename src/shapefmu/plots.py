@@ -11,6 +11,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402  (the backend must be chosen first)
 import numpy as np  # noqa: E402
 
+from shapefmu import files  # noqa: E402
+
 from shapefmu.analysis import SensitivityCurve  # noqa: E402
 
 
@@ -45,13 +47,12 @@ def plot_shaped_command(t, u, shaped: dict[str, np.ndarray], path, ylabel: str =
 
 
 def save_figure(fig, path) -> Path:
-    """Write ``fig`` to ``path`` (its folder created), close it, and return the path."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
+    """Write ``fig`` to ``path`` (``shapefmu.files``: checked, whole), close it, and return the path."""
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    try:
+        return files.save_figure(fig, path, dpi=120)
+    finally:
+        plt.close(fig)
 
 
 def plot_motion_profile(profile, path, title: str = "") -> Path:
@@ -90,31 +91,56 @@ def plot_identified(found, path) -> Path:
 
 
 def plot_recommendation(spectra, advice, path) -> Path:
-    """The measured spectra (left axis) and every candidate's remaining-vibration curve V(f) (right
-    axis, worst over the damping range): the pick and the best of Klipper's six drawn bold."""
+    """What a person reads off a recommendation: the spectrum Klipper judges (left axis) with the
+    identified modes marked and what the pick and Klipper's pick leave of it, and on the right axis the
+    share each leaves at every frequency (worst over the test dampings) with at most three other
+    candidates; the legend sits below the axes, off the data."""
     from shapefmu.identification.recommend import remaining_curve
 
-    fig, ax = plt.subplots(figsize=(10, 6))
-    top = 2.5 * max(m.frequency for m in advice.modes) if advice.modes else spectra[0].freq[-1]
+    pick, klipper = advice.pick, advice.klipper_pick
+    others = [c for c in advice.candidates if not (c.same(pick) or c.same(klipper))][:3]
+    top = min(advice.max_freq, max(s.freq[-1] for s in spectra))
+    fig, ax = plt.subplots(figsize=(10, 7))
+    worst = None
     for s in spectra:
         keep = s.freq <= top
-        ax.plot(s.freq[keep], s.psd[keep], color="k", lw=1.2, label=f"spectrum {Path(s.source).name} ({s.axis})")
+        ax.plot(s.freq[keep], s.psd[keep], color="k", lw=1.4, label=f"spectrum {Path(s.source).name} ({s.axis})")
+        worst = s if worst is None or s.psd.max() > worst.psd.max() else worst
+    keep = worst.freq <= top
+    for c, style in ((klipper, dict(color="tab:blue", ls="--")), (pick, dict(color="tab:red", ls="-"))):
+        after = worst.psd[keep] * remaining_curve(c, worst.freq[keep], advice.dampings)
+        ax.plot(worst.freq[keep], after, lw=1.2, alpha=0.8, **style, label=f"left by {_name(c)}")
+    for m in advice.modes:
+        ax.axvline(m.frequency, color="0.5", ls=":", lw=1)
+        ax.annotate(f"{m.frequency:.1f} Hz", (m.frequency, 1.0), xycoords=("data", "axes fraction"), fontsize=8,
+                    rotation=90, va="top", ha="right", color="0.3")
     ax.set_xlabel("frequency (Hz)")
-    ax.set_ylabel("power spectral density")
+    ax.set_ylabel("power spectral density (as Klipper judges it)")
     ax.set_xlim(0, top)
+    ax.set_ylim(bottom=0)
     right = ax.twinx()
     freq = np.linspace(0.5, top, 2000)
-    for c in advice.candidates:
-        bold = c is advice.pick or c is advice.baseline
-        label = f"{c.label} {'/'.join(f'{f:.1f}' for f in c.frequencies)} Hz: {100 * c.vibration:.1f} %, " \
-                f"{c.max_accel:.0f} mm/s^2" + (" (pick)" if c is advice.pick else "") + \
-                (" (best of Klipper's six)" if c is advice.baseline else "")
-        right.plot(freq, remaining_curve(c, freq, advice.dampings), lw=2.2 if bold else 0.7,
-                   alpha=1.0 if bold else 0.5, label=label)
-    right.set_ylabel("vibration left by the shaper (worst over damping)")
+    for c in others:
+        right.plot(freq, remaining_curve(c, freq, advice.dampings), lw=0.8, alpha=0.6, label=_described(c))
+    right.plot(freq, remaining_curve(klipper, freq, advice.dampings), color="tab:blue", ls="--", lw=2,
+               label=_described(klipper) + " (Klipper's pick)")
+    right.plot(freq, remaining_curve(pick, freq, advice.dampings), color="tab:red", lw=2.4,
+               label=_described(pick) + f" (pick, {advice.firmware})")
+    right.set_ylabel("share of the vibration left (worst over damping)")
     right.set_ylim(0, 1.05)
-    lines = ax.get_legend_handles_labels()
-    more = right.get_legend_handles_labels()
-    right.legend(lines[0] + more[0], lines[1] + more[1], fontsize=6, loc="upper right", ncol=2)
-    ax.set_title(f"pick: {advice.pick.label}; vibration bound {100 * advice.bound:.2f} %")
+    handles = [h for a in (ax, right) for h in a.get_legend_handles_labels()[0]]
+    labels = [t for a in (ax, right) for t in a.get_legend_handles_labels()[1]]
+    # below the x axis: tight_layout makes room for it, and no curve runs under it
+    right.legend(handles, labels, loc="upper center", bbox_to_anchor=(0.5, -0.09), ncol=2, fontsize=8, frameon=False)
+    ax.set_title(f"{advice.firmware} pick: {_name(pick)}; {advice.verdict}")
     return save_figure(fig, path)
+
+
+def _name(candidate) -> str:
+    freqs = "/".join(f"{f:.1f}" for f in candidate.frequencies)
+    return f"{candidate.label} {freqs} Hz" if freqs else f"{candidate.label} ({len(candidate.times)} impulses)"
+
+
+def _described(candidate) -> str:
+    return (f"{_name(candidate)}: vibration {100 * candidate.vibration:.2f} %, max accel {candidate.max_accel:.0f}, "
+            f"score {candidate.score:.2e}")

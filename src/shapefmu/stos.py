@@ -31,6 +31,7 @@ import control
 import numpy as np
 from scipy.linalg import expm
 
+from shapefmu.files import save_figure
 from shapefmu.plants import Plant, as_plant
 from shapefmu.runtime.checks import check_finite, check_positive, check_size
 from shapefmu.runtime.stos import STOSKernel, stos_curves
@@ -367,8 +368,10 @@ def plot_stos(results: dict[str, STOSResult], path, plant=None) -> None:
     for row, label in enumerate(("u", "x_r", "x_r'", "x_f [1e-4]", "x_f'")):
         axes[row, 0].set_ylabel(label)
     fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
+    try:
+        save_figure(fig, path)
+    finally:
+        plt.close(fig)
 
 
 def rigid_bang_bang_residual(plant, distance: float, Ts: float, window: float = 2e-3,

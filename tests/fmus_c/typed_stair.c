@@ -1,7 +1,7 @@
 /* TypedStair: a small FMI 2.0 Model Exchange + Co-Simulation FMU for the master's tests, with a
  * variable of every FMI 2.0 type and a termination request at a parameterised time.
  *
- * Behaviour (closed forms the tests compare against; see tests/c_fmus.py for the variables):
+ * Behaviour (closed forms the tests compare against; see tests/support/c_fmus.py for the variables):
  *   counter = sign(mode) * increment * floor(t / period)       Integer output, steps at t = j period
  *   level   = integral of x_in dt                              Real state (der(level) = x_in)
  *   x_out   = x_in + counter                                   Real, feeds through x_in

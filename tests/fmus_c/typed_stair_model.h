@@ -3,7 +3,7 @@
  * output from the inputs, the parameters and the time (see typed_stair.c for the closed forms).
  *
  * Exporter behaviours, each chosen at compile time so one model gives the FMUs that behave as other
- * tools' FMUs do (tests/c_fmus.py builds them; tests/test_cosim_exporters.py runs them):
+ * tools' FMUs do (tests/support/c_fmus.py builds them; tests/test_cosim_exporters.py runs them):
  *   QUIRK_PROVISIONAL    a Co-Simulation step with noSetFMUStatePriorToCurrentPoint = false may be
  *                        discarded (FMI 2.0 sec. 4.2.2, FMI 3.0 sec. 4.2.1), so the FMU keeps its last
  *                        confirmed state: such a step starts again from it, and only a step called

@@ -1,6 +1,6 @@
 /*
  * A small FMI 2.0 co-simulation host in C that behaves like the hosts we did not write: the FMU
- * compliance checker (fmuCheck) and OMSimulator. Compiled and run by tests/c_host.py.
+ * compliance checker (fmuCheck) and OMSimulator. Compiled and run by tests/support/c_hosts.py.
  *
  *   fmi2_host [options] --fmu DIR IDENTIFIER GUID INPUT_VRS OUTPUT_VRS [--fmu ...]
  *

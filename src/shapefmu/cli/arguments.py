@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import math
 import os
+import sys
 from pathlib import Path
 
 
@@ -84,8 +85,13 @@ def output_folder(text: str) -> str:
     return text
 
 
+def say_written(args, message: str) -> None:
+    """Say that a file was written: on stdout, or on stderr when ``--json`` keeps stdout for the JSON alone."""
+    print(message, file=sys.stderr if getattr(args, "json", None) is True else sys.stdout)
+
+
 def _check_writable(path: Path, text: str) -> None:
-    from shapefmu.cosim.output_files import check_output
+    from shapefmu.files import check_output
 
     if os.path.isdir(path) and not os.path.islink(path):  # os.path: False, not OSError, on too long a name
         raise argparse.ArgumentTypeError(f"{text!r} is a folder; give a file name")

@@ -6,7 +6,8 @@ from __future__ import annotations
 import json
 import math
 
-from shapefmu.cli.arguments import add_design_arguments, add_sampling_arguments, examples, output_file, parse_mode
+from shapefmu.cli.arguments import (add_design_arguments, add_sampling_arguments, examples, output_file, parse_mode,
+                                     say_written)
 
 
 def _design(args):
@@ -108,7 +109,7 @@ def _cmd_profile(args) -> int:
     if args.plot:
         from shapefmu.plots import plot_motion_profile
 
-        print(f"profile plot written to {plot_motion_profile(profile, args.plot, title=args.kind)}")
+        say_written(args, f"profile plot written to {plot_motion_profile(profile, args.plot, title=args.kind)}")
     return 0
 
 

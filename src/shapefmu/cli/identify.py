@@ -1,7 +1,7 @@
 """``shapefmu identify`` and ``shapefmu recommend``: from a recording of the machine to its shaper.
 
     shapefmu identify RECORDING... [--axis x|y|z|xyz|DX,DY,DZ] [--time COL | --fs HZ] [--column COL]
-    shapefmu recommend RECORDING... | --mode HZ[:ZETA]... [--max-smoothing MM] [--max-vibration FRACTION]
+    shapefmu recommend RECORDING... | --mode HZ[:ZETA]... [--firmware klipper|rrf|marlin|fmu] [--max-smoothing MM]
                        [--accel MM_S2] [--scv MM_S] [--plot PNG] [--json] [--build OUT.fmu [--python]]
 """
 
@@ -12,7 +12,7 @@ import math
 import sys
 from pathlib import Path
 
-from shapefmu.cli.arguments import examples, output_file, parse_mode
+from shapefmu.cli.arguments import examples, output_file, parse_mode, say_written
 from shapefmu.cli.progress import showing
 
 AXIS_CHOICES = ("x", "y", "z", "xyz")
@@ -47,21 +47,21 @@ def _identify_all(args):
                      f_min=args.f_min, f_max=args.f_max, ringdown=args.ringdown) for path in args.recording]
 
 
-def _print_identified(found) -> None:
+def _print_identified(found, say=print) -> None:
     if found.recording is not None:
-        print(found.recording.describe())
+        say(found.recording.describe())
     else:
-        print(f"{found.spectrum.source}: Klipper spectrum file, axis {found.spectrum.axis}")
-    print(f"  spectrum: {found.spectrum.settings}")
+        say(f"{found.spectrum.source}: Klipper spectrum file, axis {found.spectrum.axis}")
+    say(f"  spectrum: {found.spectrum.settings}")
     modes = found.modes
     if not modes.modes:
-        print(f"  no resonance above the threshold: no peak within 3 decades of the highest with a prominence of "
-              f"0.5 decades (noise floor {modes.noise_floor:.3g})")
+        say(f"  no resonance above the threshold: no peak within 3 decades of the highest with a prominence of "
+            f"0.5 decades (noise floor {modes.noise_floor:.3g})")
         return
-    print(f"  {len(modes.modes)} mode(s), {modes.response} response, {modes.excitation} excitation "
-          f"(standard errors from the fit; a lower bound):")
+    say(f"  {len(modes.modes)} mode(s), {modes.response} response, {modes.excitation} excitation "
+        f"(standard errors from the fit; a lower bound):")
     for mode in modes.modes:
-        print(f"    {mode.describe()}")
+        say(f"    {mode.describe()}")
 
 
 def _cmd_identify(args) -> int:
@@ -78,7 +78,7 @@ def _cmd_identify(args) -> int:
     if args.plot:
         from shapefmu.plots import plot_identified
 
-        print(f"spectrum plot written to {plot_identified(found, args.plot)}")
+        say_written(args, f"spectrum plot written to {plot_identified(found, args.plot)}")
     return 0
 
 
@@ -95,46 +95,63 @@ def _progress():
 
 
 def _cmd_recommend(args) -> int:
-    from shapefmu.identification import Mode, recommend
-    from shapefmu.identification.synthetic import SyntheticMode, transmissibility
+    from shapefmu.identification import Mode, klipper, recommend
+    from shapefmu.identification.recommend import check_modes, usable_modes
 
     if bool(args.recording) == bool(args.mode):
         raise ValueError("give recordings or --mode HZ[:ZETA] (one or more), not both and not neither")
+    if args.build and args.firmware != "fmu":
+        raise ValueError(f"--build writes an FMU, the fmu target: give --firmware fmu, not {args.firmware}")
+    if args.build:  # the .ssv written beside the FMU, checked before the work as --build itself is
+        from shapefmu.files import check_output
+
+        check_output(Path(args.build).with_suffix(".ssv"), "parameter set", named=False)
+    # with --json, stdout holds the JSON alone: every other line goes to stderr
+    say = (lambda text: print(text, file=sys.stderr)) if args.json else print
+    max_freq = klipper.metrics.MAX_FREQ
     if args.recording:
         found = _identify_all(args)
-        if not args.json:
-            for f in found:
-                _print_identified(f)
-        spectra = [f.spectrum for f in found]
-        modes = _merged_modes([f.modes.modes for f in found])
+        for f in found:
+            _print_identified(f, say)
+        # judged as Klipper judges, on every accelerometer axis summed; --axis chose the modes and names the lines
+        spectra = [s for f, path in zip(found, args.recording) for s in klipper.judged_spectra(f.recording, path)]
+        modes, set_aside = usable_modes(_merged_modes([f.modes.modes for f in found]))
+        for note in set_aside:
+            say(note)
         if not modes:
             raise ValueError("no resonance found in the recordings, so there is nothing to shape (see identify's output)")
     else:
-        import numpy as np
-
-        modes = tuple(Mode(w / (2 * math.pi), z, 0.0, 0.0, 1.0, "given") for w, z in args.mode)
-        # Without a recording, the spectrum is the modes' own: each as a unit-share transmitted mode.
-        top = max(m.frequency for m in modes)
-        freq = np.linspace(0.2, 3 * top, 6000)
-        psd = sum(np.abs(transmissibility([SyntheticMode(m.frequency, max(m.zeta, 0.005))], freq)) ** 2 for m in modes)
-        from shapefmu.identification.spectra import Spectrum
-
-        spectra = [Spectrum("--mode", "model", freq, psd, "the given modes' transmissibility, summed")]
-    advice = recommend(spectra, modes, accel=args.accel, scv=args.scv, max_smoothing=args.max_smoothing,
-                       max_vibration=args.max_vibration, ts=args.filter_ts,
-                       progress=_progress() if showing(args) else None)
+        modes = check_modes(Mode(w / (2 * math.pi), z, 0.0, 0.0, 1.0, "given") for w, z in args.mode)
+        spectra = [_model_spectrum(modes)]
+        max_freq = max(max_freq, 1.5 * max(m.frequency for m in modes))  # Klipper's --max_freq, to cover them
+    axes = (args.axis,) if args.axis in ("x", "y", "z") else ("x", "y")
+    advice = recommend(spectra, modes, firmware_name=args.firmware, buildable=bool(args.build), axes=axes,
+                       accel=args.accel, scv=args.scv, max_smoothing=args.max_smoothing, max_freq=max_freq,
+                       ts=args.filter_ts, progress=_progress() if showing(args) else None)
     if args.json:
-        print(json.dumps(advice.to_json(), indent=2))
+        print(json.dumps(advice.to_json(), indent=2, allow_nan=False))
     else:
         _print_table(advice, len(spectra) if args.recording else 0)
     if args.plot:
         from shapefmu.plots import plot_recommendation
 
-        print(f"recommendation plot written to {plot_recommendation(spectra, advice, args.plot)}")
+        say(f"recommendation plot written to {plot_recommendation(spectra, advice, args.plot)}")
     if args.build:
         for path in _build(advice.pick, Path(args.build), python=args.python, fmi_version=args.fmi_version):
-            print(f"wrote {path}")
+            say(f"wrote {path}")
     return 0
+
+
+def _model_spectrum(modes):
+    """Without a recording, the spectrum is the modes' own: each a unit-share transmitted mode."""
+    import numpy as np
+
+    from shapefmu.identification.spectra import Spectrum
+    from shapefmu.identification.synthetic import SyntheticMode, transmissibility
+
+    freq = np.linspace(0.2, 3 * max(m.frequency for m in modes), 6000)
+    psd = sum(np.abs(transmissibility([SyntheticMode(m.frequency, max(m.zeta, 0.005))], freq)) ** 2 for m in modes)
+    return Spectrum("--mode", "model", freq, psd, "the given modes' transmissibility, summed")
 
 
 def _merged_modes(per_file):
@@ -150,42 +167,49 @@ def _merged_modes(per_file):
 
 def _print_table(advice, recordings: int) -> None:
     across = f"worst of {recordings} recordings and " if recordings > 1 else ""
-    print(f"shapers judged on Klipper's metrics: vibration = share of the spectrum above max/20 left, {across}worst over "
+    print(f"judged by Klipper's measures: vibration = share of the spectrum above max/20 left, {across}worst over "
           f"damping {', '.join(f'{z:g}' for z in advice.dampings)}; smoothing at {advice.accel:g} mm/s^2 and "
-          f"{advice.scv:g} mm/s square corner; max accel for smoothing <= {advice.max_smoothing:g} mm")
-    print(f"{'shaper':<16} {'frequencies Hz':<16} {'vibration':>9} {'at modes':>8} {'smoothing':>9} "
-          f"{'max accel':>9} {'duration':>9}")
+          f"{advice.scv:g} mm/s square corner; max accel for smoothing <= {advice.max_smoothing:g} mm; "
+          f"score = smoothing (v^1.5 + 0.2 v + 0.01). 'at modes' is ours: the worst V at the identified modes.")
+    print(f"{'shaper':<22} {'family':<8} {'Hz':<13} {'vibration':>9} {'max accel':>9} {'score':>9} {'smoothing':>9} "
+          f"{'at modes':>8} {'duration':>9}")
     for c in advice.candidates:
-        marks = (" <- pick" if c is advice.pick else "") + (" <- best of Klipper's six" if c is advice.baseline else "")
-        print(f"{c.label:<16} {'/'.join(f'{f:.1f}' for f in c.frequencies):<16} {100 * c.vibration:8.2f}% "
-              f"{100 * c.at_modes:7.1f}% {c.smoothing:8.3f}mm {c.max_accel:9.0f} {1000 * c.duration:7.1f}ms{marks}")
-    if advice.baseline not in advice.candidates:
-        c = advice.baseline
-        print(f"best of Klipper's six: {c.label} at {c.frequencies[0]:.1f} Hz, {100 * c.vibration:.2f}%, "
-              f"max accel {c.max_accel:.0f}")
-    pick, base = advice.pick, advice.baseline
-    gain = pick.max_accel / base.max_accel if base.max_accel > 0 else math.inf
-    print(f"pick: {pick.label} at {'/'.join(f'{f:.2f}' for f in pick.frequencies)} Hz: vibration "
-          f"{100 * pick.vibration:.2f}% (Klipper's six at best: {100 * base.vibration:.2f}%), max accel "
-          f"{pick.max_accel:.0f} mm/s^2 ({gain:.2f} x the best of Klipper's six, {base.label})")
+        marks = (" <- pick" if c is advice.pick else "") + (" <- Klipper's pick" if c.same(advice.klipper_pick) else "") \
+            + ("" if c.guarded else " (fails the guards)")
+        print(f"{c.label:<22} {c.family:<8} {'/'.join(f'{f:.1f}' for f in c.frequencies) or '-':<13} "
+              f"{100 * c.vibration:8.3f}% {c.max_accel:9.0f} {c.score:9.2e} {c.smoothing:7.3f}mm {100 * c.at_modes:7.1f}% "
+              f"{1000 * c.duration:7.1f}ms{marks}")
+    if advice.left_out:
+        print("left out: " + "; ".join(advice.left_out))
+    pick, base = advice.pick, advice.klipper_pick
+    print(f"Klipper's pick: {base.kind} at {base.frequencies[0]:.1f} Hz, vibration {100 * base.vibration:.3f}%, "
+          f"max accel {base.max_accel:.0f} mm/s^2, score {base.score:.3e}")
+    print(f"pick ({advice.firmware}): {pick.label}, vibration {100 * pick.vibration:.3f}%, max accel {pick.max_accel:.0f} "
+          f"mm/s^2 ({pick.max_accel / base.max_accel:.3f} x Klipper's), score {pick.score:.3e} "
+          f"({pick.score / base.score:.3f} x Klipper's): {advice.verdict}")
+    if pick.line:
+        print(pick.line)
+    elif pick.fmu:
+        model = "ShapeFilter" if pick.family == "window" else "Shaper"
+        print(f"{model} FMU (recommend --build OUT.fmu): " + ", ".join(f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}"
+                                                                   for k, v in pick.fmu))
+    else:
+        print("impulses (s: amplitude): " + ", ".join(f"{t:.6f}: {a:.4f}" for t, a in zip(pick.times, pick.amplitudes)))
 
 
 def _build(pick, out: Path, *, python: bool, fmi_version: str = "2.0") -> list[Path]:
     """The pick as a Shaper or ShapeFilter FMU (native unless ``python``; native as FMI
-    ``fmi_version``) and its .ssv parameter set."""
+    ``fmi_version``) and its .ssv parameter set, a file beside it the user did not name (never one that exists)."""
     from shapefmu.fmi.ssp import write_ssv
 
+    if pick.fmu is None:
+        raise ValueError(f"the pick ({pick.label}, {pick.family}) is not a design an FMU kind holds")
+    starts = dict(pick.fmu)
     if pick.family == "window":
         model = "ShapeFilter"
-        starts = {"kind": pick.kind, "f": pick.frequencies[0], "zeta": pick.zetas[0], "Ts": pick.ts,
-                  "adjust_Ts": True}
     else:
         model = "Shaper"
-        kind = pick.kind
-        starts = {"kind": kind, "n": 1, "vtol": 0.05, "n_modes": len(pick.frequencies)}
-        for i, (f, z) in enumerate(zip(pick.frequencies, pick.zetas), start=1):
-            starts[f"f[{i}]"] = f
-            starts[f"zeta[{i}]"] = min(z, 0.5)
+        starts = {"n": 1, "n_modes": 1, **starts}
         starts["Ts"] = 1.0 / (200.0 * max(pick.frequencies))
     if python:
         if fmi_version != "2.0":
@@ -198,7 +222,7 @@ def _build(pick, out: Path, *, python: bool, fmi_version: str = "2.0") -> list[P
         from shapefmu.fmi.native.sampled import build_native_fmu
 
         fmu = build_native_fmu(model, out, fmi_version=fmi_version, **starts)
-    ssv = write_ssv(out.with_suffix(".ssv"), starts)
+    ssv = write_ssv(out.with_suffix(".ssv"), starts, named=False)
     return [fmu, ssv]
 
 
@@ -228,27 +252,31 @@ def register(commands) -> None:
     p.add_argument("--plot", metavar="PNG", type=output_file("plot"), help="save the spectrum with its modes")
     p.set_defaults(run=_cmd_identify)
 
-    p = commands.add_parser("recommend", help="rank every shaper family on a recording and pick one",
-                            epilog=examples("shapefmu recommend resonances_x.csv --axis x --build fmus/MachineShaper.fmu",
+    p = commands.add_parser("recommend", help="Klipper's pick and ours for a recording, judged by Klipper's measures",
+                            epilog=examples("shapefmu recommend resonances_x.csv --axis x --firmware klipper",
+                                            "shapefmu recommend resonances_x.csv --axis x --build fmus/MachineShaper.fmu",
                                             "shapefmu recommend --mode 25:0.05 --mode 62:0.08"))
     p.add_argument("recording", nargs="*", help="recording files; several give one pick for the worst of them")
     p.add_argument("--mode", type=parse_mode, action="append", metavar="HZ[:ZETA]", help="a mode, instead of recordings")
     _add_reading(p)
     p.add_argument("--max-smoothing", type=float, default=DEFAULT_MAX_SMOOTHING, metavar="MM",
-                   help=f"smoothing bound for the max accel (default {DEFAULT_MAX_SMOOTHING} mm, Klipper's)")
-    p.add_argument("--max-vibration", type=float, default=0.05, metavar="FRACTION",
-                   help="vibration bound of the pick (default 0.05)")
+                   help=f"smoothing bound for the max accel, in [0.05, 10] (default {DEFAULT_MAX_SMOOTHING} mm, Klipper's)")
+    p.add_argument("--firmware", choices=("klipper", "rrf", "marlin", "fmu"), default="fmu",
+                   help="what runs the shaper: klipper (its six shapers), rrf (RepRapFirmware's M593, custom "
+                        "included), marlin (M593 / M493), fmu (anything shapefmu builds, default)")
     p.add_argument("--accel", type=float, default=DEFAULT_ACCEL, metavar="MM_S2",
-                   help=f"acceleration the smoothing is reported at (default {DEFAULT_ACCEL:g})")
+                   help=f"acceleration the smoothing and score are taken at, in [1, 1e6] (default {DEFAULT_ACCEL:g})")
     p.add_argument("--scv", type=float, default=DEFAULT_SCV, metavar="MM_S",
                    help=f"square-corner velocity (default {DEFAULT_SCV:g} mm/s)")
     p.add_argument("--filter-ts", type=float, default=1e-3, metavar="S",
-                   help="sampling period of the window filters judged (default 1e-3 s)")
-    p.add_argument("--json", action="store_true", help="print the table, the pick and the settings as JSON")
+                   help="sampling period of the window filters judged, in [1e-5, 1e-2] (default 1e-3 s)")
+    p.add_argument("--json", action="store_true",
+                   help="print the pick, Klipper's pick and the candidates as JSON (stdout holds the JSON alone)")
     p.add_argument("--plot", metavar="PNG", type=output_file("plot"),
-                   help="save the spectrum with every candidate's remaining-vibration curve")
+                   help="save the spectrum, its modes, the pick, Klipper's pick and three more")
     p.add_argument("--build", metavar="OUT.fmu", type=output_file(".fmu", what="FMU"),
-                   help="write the pick as a Shaper or ShapeFilter FMU (native C) and OUT.ssv beside it")
+                   help="with --firmware fmu: pick among the designs an FMU holds and write it as a Shaper or "
+                        "ShapeFilter FMU (native C) and OUT.ssv beside it")
     p.add_argument("--python", action="store_true", help="with --build: the pythonfmu FMU instead of the native one")
     p.add_argument("--fmi-version", choices=("2.0", "3.0"), default="2.0",
                    help="with --build: FMI version of the native FMU (default 2.0; 3.0: array parameters)")

@@ -13,9 +13,9 @@ from __future__ import annotations
 import argparse
 import json
 import math
-from pathlib import Path
 
-from shapefmu.cli.arguments import examples, output_file
+from shapefmu.cli.arguments import examples, output_file, say_written
+from shapefmu.files import write_text
 
 
 def _axis(text: str):
@@ -73,8 +73,7 @@ def _cmd_plan(args) -> int:
                       straight=args.straight, ts=args.ts if args.snap else None)
     peer = ruckig_duration([(p, 0.0, 0.0) for p in start], [(p, 0.0, 0.0) for p in target], limits, args.straight)
     if args.out:
-        Path(args.out).parent.mkdir(parents=True, exist_ok=True)
-        Path(args.out).write_text(trajectory.to_csv(args.ts))
+        write_text(args.out, trajectory.to_csv(args.ts), what="trajectory table")
     record = {
         "duration": trajectory.duration,
         "method": trajectory.method,
@@ -88,6 +87,7 @@ def _cmd_plan(args) -> int:
     }
     if args.json:
         print(json.dumps(record, indent=2))
+        _say_samples_written(args)
         return 0
     print(f"move of {', '.join(names)}: {1e3 * trajectory.duration:.4f} ms ({trajectory.method}), "
           f"computed in {1e6 * trajectory.compute_seconds:.0f} us")
@@ -102,9 +102,13 @@ def _cmd_plan(args) -> int:
     if trajectory.residuals:
         shapers = ", ".join(f"{n}: {s}" for n, s in zip(names, trajectory.ceiling_shapers) if s)
         print(f"Ruckig + shortest shaper ({shapers}): {1e3 * trajectory.ceiling_duration:.4f} ms")
-    if args.out:
-        print(f"samples at ts = {args.ts:g} s written to {args.out}")
+    _say_samples_written(args)
     return 0
+
+
+def _say_samples_written(args) -> None:
+    if args.out:
+        say_written(args, f"samples at ts = {args.ts:g} s written to {args.out}")
 
 
 def register(commands) -> None:

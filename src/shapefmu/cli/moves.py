@@ -7,10 +7,11 @@ from shapefmu.cli.arguments import examples, output_file
 
 
 def _cmd_optimal(args) -> int:
+    from shapefmu.cli.progress import reporter
     from shapefmu.optimal import optimal_report
 
     print(optimal_report(args.file, args.distance, u_max=args.u_max, plot=args.plot, json_path=args.json,
-                         csv_path=args.csv))
+                         csv_path=args.csv, progress=reporter(args, "optimal")))
     return 0
 
 

@@ -121,6 +121,8 @@ def _report(results, args, stopped: str | None) -> None:
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
 
+        from shapefmu.files import save_figure
+
         names = [name for name in results.dtype.names[1:] if results.dtype[name].kind in "fiub"]  # no strings
         figure, axes = plt.subplots(len(names), 1, sharex=True, figsize=(8, 2 + 1.6 * len(names)), squeeze=False)
         for axis, name in zip(axes[:, 0], names):
@@ -128,8 +130,7 @@ def _report(results, args, stopped: str | None) -> None:
             axis.set_ylabel(name)
         axes[-1, 0].set_xlabel("time [s]")
         figure.tight_layout()
-        Path(args.plot).parent.mkdir(parents=True, exist_ok=True)
-        figure.savefig(args.plot)
+        save_figure(figure, args.plot)
         print(f"plot written to {args.plot}")
 
 

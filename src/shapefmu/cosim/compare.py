@@ -43,7 +43,8 @@ from pathlib import Path
 
 import numpy as np
 
-from shapefmu.runtime.checks import check_finite, check_positive
+from shapefmu.files import save_figure, write_text
+from shapefmu.runtime.checks import check_finite, check_positive, check_size
 
 CANDIDATES = ("bang-bang", "convolution", "simultaneous", "stos-convolution", "stos-simultaneous", "ekf-tuned",
               "time-optimal")
@@ -148,7 +149,7 @@ class FMUCache:
             path.parent.mkdir(exist_ok=True)
             build(path)
             self._stamps[file_name] = fingerprint
-            self._stamps_path.write_text(json.dumps(self._stamps, indent=1, sort_keys=True))
+            write_text(self._stamps_path, json.dumps(self._stamps, indent=1, sort_keys=True), "FMU cache stamps")
         return path
 
     def slave(self, name: str, **start_values) -> Path:
@@ -359,6 +360,9 @@ def compare(plant_model, distance: float, candidates=CANDIDATES, step: float = 1
     u_max = check_positive(u_max, "u_max")
     modes = _modes_hz(plant)
     window = 2.0 * math.pi / min(omega for omega, _ in plant.flexible_modes())
+    # the master's bound on the run's steps, before the designs (the run lasts at least two periods)
+    check_size((2.0 * window if stop_time is None else check_positive(stop_time, "stop_time")) / step, "MAX_MACRO_STEPS",
+               f"a run by steps of {step!r} s takes at least", "macro steps", "take a longer step")
     say = progress or (lambda text: None)
     fmus = FMUCache(cache, native=native, fmi_version=fmi_version)
     say(f"building or reusing the plant FMU in {cache}")
@@ -409,8 +413,9 @@ def compare(plant_model, distance: float, candidates=CANDIDATES, step: float = 1
             path = Path(write_ssp)
             if target == "omsimulator":
                 sys_ = _baked_in(sys_, fmus, strings_only=True)
+            # one system per candidate beside the name given: files the user did not name, never replaced
             written.append(write_system(sys_.for_experiment(start + stop_time), path.with_stem(f"{path.stem}_{name.replace('-', '_')}"),
-                                        target, step if target else None))
+                                        target, step if target else None, named=False))
         if start > 0.0:
             # The plant is linear: remove what is left of the identification move's ring-down
             # (that move alone through the same tuner, which passes it unshaped and one step late
@@ -530,8 +535,7 @@ def plot_compare(comparison: Comparison, path) -> Path:
     axes[0].legend(fontsize="small", ncol=3)
     axes[0].set_title(f"{comparison.plant}: move of {comparison.distance:g}, FMUs at {comparison.step:g} s")
     figure.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    figure.savefig(path)
-    plt.close(figure)
-    return path
+    try:
+        return save_figure(figure, path)
+    finally:
+        plt.close(figure)

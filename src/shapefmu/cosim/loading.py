@@ -13,8 +13,20 @@ from pathlib import Path
 import fmpy
 from fmpy import extract, read_model_description
 
+from shapefmu.cosim.types import array_size
 from shapefmu.cosim.units import ModelExchangeUnit, Unit
 from shapefmu.cosim.units3 import ModelExchangeUnit3, Unit3
+from shapefmu.runtime import limits
+
+
+def _check_arrays(name: str, fmu: Path, description) -> None:
+    """Refuse an array the master could not hold before anything is allocated (limits.MAX_ARRAY_ELEMENTS)."""
+    for variable in description.modelVariables:
+        size = array_size(variable)
+        if size is not None and size > limits.MAX_ARRAY_ELEMENTS:
+            raise ValueError(f"component {name!r}: {fmu.name} declares {variable.name} an array of {size:,} elements, "
+                             f"more than the {limits.MAX_ARRAY_ELEMENTS:,} the master takes "
+                             f"(shapefmu.runtime.limits.MAX_ARRAY_ELEMENTS)")
 
 
 def load_units(components: list[tuple[str, Path]], model_exchange: set[str]) -> tuple[list[Unit], list[str]]:
@@ -26,6 +38,7 @@ def load_units(components: list[tuple[str, Path]], model_exchange: set[str]) -> 
             fmu = Path(fmu).resolve()
             if fmu not in extracted:
                 description = read_model_description(str(fmu), validate=False)
+                _check_arrays(name, fmu, description)
                 folder = extract(str(fmu))
                 folders.append(folder)
                 extracted[fmu] = (folder, description)

@@ -1,14 +1,11 @@
 """Files that runs write their results to: one writer at a time, whole or marked partial, never a trap.
 
-* ``check_output(path, what)``: refused before any work, with a one-line message, when the path is a
-  link, a folder, a FIFO or a device (a FIFO with no reader would block the write forever), or a
-  name the file system cannot hold (more than 255 bytes in one part).
+Written, as every file of shapefmu, through ``shapefmu.files`` (checked, whole, never through a link).
+
 * ``output_lock(path)``: an exclusive lock on the file for the lifetime of a run (``fcntl.flock`` on
   a hidden ``.<name>.lock`` beside it): a second run writing the same file is refused at once,
   naming the process that holds it, instead of the two mixing or dropping each other's rows.
-* ``replace_atomically(path, write)``: ``write(temporary)`` into a uniquely named file beside
-  ``path``, then renamed over it: a reader, or a run killed mid-write, sees the old file or the new
-  one, never half of one.
+* ``save_results(results, path, partial)``: recorded results as CSV or Parquet.
 """
 
 from __future__ import annotations
@@ -17,34 +14,9 @@ import contextlib
 import errno
 import fcntl
 import os
-import stat
-import tempfile
 from pathlib import Path
 
-NAME_MAX = 255  # bytes of one path component on Linux file systems (ext4, xfs, btrfs, tmpfs)
-
-
-def check_output(path, what: str = "output file") -> Path:
-    """``path`` as a file a run may write: refused (ValueError) if it is a link, a folder, a FIFO, a
-    device or socket, or if one of its names is longer than the file system allows."""
-    path = Path(path)
-    for part in path.parts:
-        if len(os.fsencode(part)) > NAME_MAX:
-            raise ValueError(f"{what} {str(path)[:80]!r}...: the name {part[:40]!r}... is {len(os.fsencode(part))} bytes, "
-                             f"more than the {NAME_MAX} a file name may have")
-    try:
-        status = os.lstat(path)
-    except (FileNotFoundError, NotADirectoryError):  # not there yet (its folders are the writer's concern)
-        return path
-    except OSError as error:
-        raise ValueError(f"{what} {str(path)!r}: {error.strerror}") from None
-    if stat.S_ISLNK(status.st_mode):
-        raise ValueError(f"{what} {str(path)!r} is a symbolic link; give the file itself (the run replaces it whole)")
-    if not stat.S_ISREG(status.st_mode):
-        kind = ("a folder" if stat.S_ISDIR(status.st_mode) else "a FIFO" if stat.S_ISFIFO(status.st_mode)
-                else "a device or socket")
-        raise ValueError(f"{what} {str(path)!r} is {kind}, not a regular file")
-    return path
+from shapefmu.files import check_output, write_file
 
 
 @contextlib.contextmanager
@@ -54,7 +26,9 @@ def output_lock(path):
     lock_path = path.with_name(f".{path.name}.lock")
     path.parent.mkdir(parents=True, exist_ok=True)
     while True:
-        handle = open(lock_path, "a+")
+        check_output(lock_path, "lock file")
+        # O_NOFOLLOW: a link planted under the lock's name is refused, never written through.
+        handle = os.fdopen(os.open(lock_path, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW, 0o600), "r+")
         try:
             fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except OSError as error:
@@ -86,33 +60,10 @@ def output_lock(path):
         handle.close()
 
 
-def replace_atomically(path, write) -> Path:
-    """Write ``path`` whole: ``write(temporary_path)`` beside it, then rename over it (see the module docstring)."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    descriptor, temporary = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    os.close(descriptor)
-    try:
-        write(Path(temporary))
-        os.chmod(temporary, 0o666 & ~_umask())
-        os.replace(temporary, path)
-    except BaseException:
-        with contextlib.suppress(FileNotFoundError):
-            os.unlink(temporary)
-        raise
-    return path
-
-
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
-
-
 def save_results(results, path, partial: str | None = None) -> Path:
     """Write recorded results to ``.csv`` (header = field names, quoted where a name needs it) or
     ``.parquet`` (needs pyarrow), each column with its type: floats with 17 significant digits,
-    integers, booleans (true/false), strings. Written whole (``replace_atomically``). ``partial``, the
+    integers, booleans (true/false), strings. Written whole (``shapefmu.files.write_file``). ``partial``, the
     reason a run stopped early, marks the file: a last CSV line ``# partial results: <reason>``, or
     the Parquet metadata key ``shapefmu.partial``."""
     import numpy as np
@@ -149,7 +100,7 @@ def save_results(results, path, partial: str | None = None) -> Path:
             table = table.replace_schema_metadata({"shapefmu.partial": partial})
         pq.write_table(table, temporary)
 
-    return replace_atomically(path, write_csv if path.suffix == ".csv" else write_parquet)
+    return write_file(path, write_csv if path.suffix == ".csv" else write_parquet, "results file")
 
 
 def _csv_format(dtype):

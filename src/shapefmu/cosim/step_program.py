@@ -39,6 +39,7 @@ import numpy as np
 
 from shapefmu.cosim.units import ModelExchangeUnit
 from shapefmu.fmi.compiler import run_compiler
+from shapefmu.runtime import limits
 
 
 @dataclass(frozen=True)
@@ -235,6 +236,10 @@ def python_only_reason(master, blocks) -> str | None:
     if len(master.units) > MAX_COMPILED_COMPONENTS:
         return (f"the system has {len(master.units)} components, more than the {MAX_COMPILED_COMPONENTS} whose "
                 f"step loop compiles in about a second")
+    values = len(master._record_sources) + sum(len(master.connection_ops(unit.name)) for unit in master.units)
+    if values > limits.MAX_COMPILED_VALUES:
+        return (f"the system moves and records {values:,} values a step, more than the {limits.MAX_COMPILED_VALUES:,} "
+                f"whose step loop compiles in about a second (shapefmu.runtime.limits.MAX_COMPILED_VALUES)")
     for _, body in blocks:
         for op in body:
             if op[0] == "me":

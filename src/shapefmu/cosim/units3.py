@@ -105,7 +105,10 @@ class Unit3(Unit):
 
     def _tick(self, t: float, in_event_mode: bool = False) -> None:
         """Tick the clocks due at ``t`` (an Event Mode of their own, see the module docstring)."""
-        due = [vr for vr, interval, shift in self.clocks if on_tick(t - self._start_time, interval, shift)]
+        # The time since the start as the whole steps it is (the master's t = t0 + k h): t - t0 itself
+        # is off by ulps of t0, 2.4e-7 s at a Unix-epoch 1.7e9, far more than a tick's tolerance.
+        elapsed = round((t - self._start_time) / self.clock_step) * self.clock_step
+        due = [vr for vr, interval, shift in self.clocks if on_tick(elapsed, interval, shift)]
         if not due and not in_event_mode:
             return
         if not in_event_mode:
@@ -183,7 +186,8 @@ def input_clocks(name: str, fmu_path: Path, unzip_directory: Path) -> list[tuple
 
 def clock_ticks_on_steps(unit, step: float) -> None:
     """Every tick of ``unit``'s clocks falls on one of its communication points (multiples of
-    ``step``, its macro step times its step multiple), else a ValueError says which and why."""
+    ``step``, its macro step times its step multiple), else a ValueError says which and why; the unit
+    then counts its ticks by that step (``clock_step``)."""
     for vr, interval, shift in getattr(unit, "clocks", ()):
         for what, value in (("interval", interval), ("shift", shift)):
             ratio = value / step
@@ -191,6 +195,7 @@ def clock_ticks_on_steps(unit, step: float) -> None:
                 raise ValueError(f"component {unit.name!r}: its clock (value reference {vr}) has {what} {value!r} s, not a "
                                  f"whole number of its communication step {step!r} s; the master ticks clocks at "
                                  f"communication points: choose a step that divides it")
+    unit.clock_step = step
 
 
 class ModelExchangeUnit3(ModelExchangeUnit, Unit3):

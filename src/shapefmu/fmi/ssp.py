@@ -36,6 +36,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from xml.etree import ElementTree as ET
 
+from shapefmu.files import check_output, write_bytes, write_file
 from shapefmu.fmi.archives import extract_system
 from shapefmu.fmi.ssp_targets import for_target
 from shapefmu.fmi.ssp_connectors import Connector, checked_values, elements, fmu_connectors, resolve
@@ -254,8 +255,7 @@ class System:
         path = Path(path)
         sources = {name: os.path.relpath(c.fmu, path.parent.resolve()) for name, c in self.components.items()}
         ssv = {name: [os.path.relpath(s, path.parent.resolve()) for s in c.ssv_sources] for name, c in self.components.items()}
-        path.write_bytes(self._xml(sources, ssv))
-        return path
+        return write_bytes(path, self._xml(sources, ssv), "system file")
 
     def write_ssp(self, path, *, target: str | None = None, step: float | None = None, fold: dict | None = None) -> Path:
         """Write an .ssp archive: SystemStructure.ssd plus the FMUs and .ssv files under resources/
@@ -267,11 +267,14 @@ class System:
         for name, component in self.components.items():
             sources[name] = "resources/" + _unique_name(names, component.fmu, name)
             ssv[name] = ["resources/" + _unique_name(names, s, name) for s in component.ssv_sources]
-        with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as archive:
-            archive.writestr("SystemStructure.ssd", self._xml(sources, ssv))
-            for file, arcname in names.items():
-                archive.write(file, "resources/" + arcname)
-        return path
+
+        def write(temporary):
+            with zipfile.ZipFile(temporary, "w", zipfile.ZIP_DEFLATED) as archive:
+                archive.writestr("SystemStructure.ssd", self._xml(sources, ssv))
+                for file, arcname in names.items():
+                    archive.write(file, "resources/" + arcname)
+
+        return write_file(path, write, "system archive")
 
     def _xml(self, sources: dict[str, str], ssv: dict[str, list[str]]) -> bytes:
         root = ET.Element(f"{{{SSD}}}SystemStructureDescription", {"version": "1.0", "name": self.name})
@@ -323,13 +326,13 @@ class System:
         return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
 
 
-def write_system(system: System, path, target: str | None = None, step: float | None = None, fold: dict | None = None) -> Path:
+def write_system(system: System, path, target: str | None = None, step: float | None = None, fold: dict | None = None,
+                 named: bool = True) -> Path:
     """``system`` to ``path``: an .ssp archive (the FMUs and .ssv files inside) or an .ssd file (they
     stay where they are), for ``target`` (None, "libcosim", "omsimulator"; see :mod:`.ssp_targets`),
-    whose ``step`` (and ``fold``) it takes."""
-    path = Path(path)
+    whose ``step`` (and ``fold``) it takes; ``named``: as for :func:`write_ssv`."""
+    path = check_output(path, "system file", named)
     options = {"target": target, "step": step, "fold": fold} if target is not None else {}
-    path.parent.mkdir(parents=True, exist_ok=True)
     return system.write_ssp(path, **options) if path.suffix.lower() == ".ssp" else system.write_ssd(path, **options)
 
 
@@ -369,13 +372,12 @@ def _type_of(value) -> str:
     return "Real"
 
 
-def write_ssv(path, parameters: dict, name: str = PARAMETER_SET) -> Path:
-    """Write ``{variable: value}`` as an SSP 1.0 parameter-value file (.ssv)."""
-    path = Path(path)
+def write_ssv(path, parameters: dict, name: str = PARAMETER_SET, named: bool = True) -> Path:
+    """Write ``{variable: value}`` as an SSP 1.0 parameter-value file (.ssv); ``named``: the user named
+    ``path`` (else it is written beside a file they named, and an existing one is refused: ``shapefmu.files``)."""
     root = _parameter_set(name, parameters)
     ET.indent(root)
-    path.write_bytes(ET.tostring(root, encoding="UTF-8", xml_declaration=True))
-    return path
+    return write_bytes(path, ET.tostring(root, encoding="UTF-8", xml_declaration=True), "parameter set", named)
 
 
 def read_ssv(path) -> dict:

@@ -14,6 +14,8 @@ sequence, or the text ``[v1, v2, ...]`` of a command line.
 
 from __future__ import annotations
 
+import math
+
 import re
 
 # SSP connector kind of each FMI variable type.
@@ -83,6 +85,15 @@ INTEGER_RANGES = {
 }
 
 
+def _overflows(text: str) -> bool:
+    """Whether the text of a number is beyond a double's range: float() would make it inf silently."""
+    try:
+        number = float(text)
+    except ValueError:
+        return False
+    return math.isinf(number) and text.lstrip("+-").lower() not in ("inf", "infinity")
+
+
 def typed_value(value, kind: str, items: dict[str, int] | None = None, what: str = "value", variable_type: str | None = None):
     """``value`` (a Python value or the text of a command line / parameter file) as the Python value
     of an FMI variable of ``kind``; an Enumeration takes an item name (``items``) or its integer.
@@ -93,6 +104,8 @@ def typed_value(value, kind: str, items: dict[str, int] | None = None, what: str
     integer beyond its type's range is refused, not wrapped around by ctypes.
     """
     text = value.strip() if isinstance(value, str) else None
+    if kind == "Real" and text is not None and _overflows(text):
+        raise ValueError(f"{what} must be a number a double holds (|x| <= 1.8e308, or inf itself), got {value!r}")
     integer_type = variable_type if variable_type in INTEGER_RANGES else "Integer"
     low, high = INTEGER_RANGES[integer_type]
     try:

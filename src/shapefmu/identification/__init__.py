@@ -2,13 +2,18 @@
 
     from shapefmu import identification as ident
     found = ident.identify("resonances_x.csv", axis="x")          # an Identified: recording, spectrum, modes
-    advice = ident.recommend([found.spectrum], found.modes.modes)  # a Recommendation: table, pick, baseline
+    judged = ident.klipper.judged_spectra(found.recording, "resonances_x.csv")  # as Klipper judges shapers
+    advice = ident.recommend(judged, found.modes.modes)            # a Recommendation: pick, Klipper's pick
 
 - ``recordings``: Klipper raw and processed files, RepRapFirmware M956, any CSV/Parquet table;
 - ``spectra``: Welch spectra with their settings, axes combined, Klipper's sweep excitation undone;
 - ``modes``: resonances with frequency, damping and uncertainty (spectrum fit; EKF on a ring-down);
-- ``metrics``: Klipper's remaining vibration, smoothing and max acceleration, derived and vectorised;
-- ``recommend``: every family of the design layer at its best frequencies, the pick and the baseline;
+- ``metrics``: Klipper's remaining vibration, smoothing, max acceleration and score, derived and vectorised;
+- ``klipper``: Klipper's shapers, spectrum reading, frequency scan and pick, rebuilt from its definitions;
+- ``judge``: designs judged by those measures on the spectra, and the judged ``Candidate``;
+- ``firmware``, ``families``, ``trains``: what Klipper, RepRapFirmware, Marlin and an FMU run, and impulse
+  trains designed for the spectrum;
+- ``recommend``: Klipper's pick, the candidates a firmware runs, the guards and the pick;
 - ``synthetic``: recordings of known machines, made as Klipper and RepRapFirmware make them.
 """
 
@@ -17,7 +22,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from shapefmu.identification.modes import Mode, Modes, find_modes, ring_down
-from shapefmu.identification.recommend import Candidate, Recommendation, recommend
+from shapefmu.identification.judge import Candidate
+from shapefmu.identification.recommend import Recommendation, recommend
 from shapefmu.identification.recordings import Recording, read_recording
 from shapefmu.identification.spectra import Spectrum, spectrum, undo_sweep_excitation
 

@@ -1,31 +1,41 @@
-"""What a shaper costs and what it leaves, on the measured spectrum: the metrics Klipper documents,
-derived here from their definitions and evaluated for many designs at once.
+"""What a shaper costs and what it leaves on the measured spectrum, by Klipper's definitions, evaluated
+for many designs at once: remaining vibration, smoothing, max_accel and score.
 
-Remaining vibration. A shaper with impulses A_i at t_i leaves, of a mode (f, zeta) excited by a
-move, the share V(f, zeta) of its vibration (Singer and Seering's percent residual vibration,
-``shapefmu.analysis.residual_vibration``). The measured spectrum P(f) says how much vibration the
-machine has at each frequency. Klipper's definition of the vibration a shaper leaves: the share of
-the spectrum above a noise threshold that survives the shaper, worst case over a set of damping
-ratios,
+Each definition is Klipper's (``klippy/extras/shaper_calibrate.py`` at commit 84104bbb, the functions
+named below; Klipper's docs/Measuring_Resonances.md describes what they mean), re-derived here and
+checked in the tests against the figures Klipper's own functions print for the development recordings
+(1e-6 relative, pinned with the commit). Nothing here is Klipper's code.
 
-    R = sum_f max(P(f) V_max(f) - T, 0) / sum_f max(P(f) - T, 0),   V_max(f) = max_zeta V(f, zeta),
+Remaining vibration (``_estimate_remaining_vibrations``). A shaper with impulses A_i at T_i leaves, of a
+mode (f, zeta) excited by a move, the share
 
-with the threshold T = max P / 20 (vibration below 1/20 of the strongest is not worth a shaper's
-delay; 20 is also what an EI shaper's 5 % tolerance reduces a resonance by). Bins under T / max|V|
-cannot contribute to the numerator and are left out before any work.
+    V(f, zeta) = |sum_i A_i exp(-zeta w (T_n - T_i)) exp(j w sqrt(1 - zeta^2) T_i)| / sum_i A_i,  w = 2 pi f
 
-Smoothing. A shaper replaces the commanded position x(t) by sum_i A_i x(t - t_i) / sum A. Measured
-from the shaper's centre of mass t_c = sum A_i t_i / sum A, an impulse at t_i > t_c moves the
-toolhead by the distance travelled in (t_i - t_c) at the corner: with the square-corner velocity v
-kept through a 90 degree corner and the acceleration a, that is (v + a/2 (t_i - t_c)) (t_i - t_c) per
-axis, sqrt(2) of it across the corner; at a 180 degree reversal (speed 0) a/2 (t_i - t_c)^2. The
-smoothing is the larger of the two deviations weighted by the impulses after t_c:
+(Singer and Seering's percent residual vibration, measured from the last impulse T_n). On a spectrum
+P(f), cut at ``MAX_FREQ`` (``fit_shaper``: max(200 Hz, the shaper's frequency)), with the threshold
+T = max P / 20 (``SHAPER_VIBRATION_REDUCTION``: what a shaper can reduce a resonance by), the share of
+the spectrum above T that the shaper leaves at one damping is
 
-    s = max( sqrt(2) sum_{t_i > t_c} A_i (v + a/2 d_i) d_i,  sum_{t_i > t_c} A_i a/2 d_i^2 ) / sum A,  d_i = t_i - t_c
+    R(zeta) = sum_f max(P(f) V(f, zeta) - T, 0) / sum_f max(P(f) - T, 0),
 
-(Klipper's ``smoothing`` and its ``max_accel`` use this definition; its default v is 5 mm/s and its
-bound on s 0.12 mm). Both terms are linear in a, so the largest acceleration that keeps s under a
-bound is a closed form (``max_accel``), not a search.
+and the remaining vibration is the worst R(zeta) over the test dampings 0.075, 0.1 and 0.15 (and over
+the spectra, when several are judged together). Note the order: the worst of the per-damping shares,
+not the share of a per-bin worst V.
+
+Smoothing (``_get_shaper_smoothing``). With t_c = sum A_i T_i / sum A the shaper's centre,
+d_i = T_i - t_c, the acceleration a and the square-corner velocity v, the toolhead's deviation at a
+90-degree corner counts the impulses at or after t_c, at a 180-degree reversal all of them:
+
+    s90 = sqrt(2) sum_{T_i >= t_c} A_i (v + a d_i / 2) d_i / sum A,   s180 = sum_i A_i a d_i^2 / 2 / sum A,
+
+and the smoothing is max(s90, s180), at a = 5000 mm/s^2 and v = 5 mm/s by default.
+
+max_accel (``find_shaper_max_accel``): the largest a with smoothing <= 0.12 mm. Klipper bisects to
+1e-8 mm/s^2; both terms are linear in a, so it is the closed form min of the two lines' crossings
+(equal to the bisection to about 1e-12 relative), 0 when v alone exceeds the bound.
+
+Score (``fit_shaper``): smoothing (at 5000 mm/s^2) * (R^1.5 + 0.2 R + 0.01), which Klipper's own
+comment calls empirical; it ranks frequencies and shapers in Klipper's pick.
 """
 
 from __future__ import annotations
@@ -34,18 +44,22 @@ import math
 
 import numpy as np
 
-THRESHOLD_SHARE = 1 / 20  # T = max P / 20
+THRESHOLD_SHARE = 1 / 20  # T = max P / 20 (SHAPER_VIBRATION_REDUCTION)
+KLIPPER_DAMPINGS = (0.075, 0.1, 0.15)  # TEST_DAMPING_RATIOS
+MAX_FREQ = 200.0  # Hz: the spectrum judged ends here (MAX_FREQ), or at the shaper's frequency if higher
 DEFAULT_SCV = 5.0  # mm/s, square-corner velocity
-DEFAULT_ACCEL = 5000.0  # mm/s^2, where smoothing is reported
-DEFAULT_MAX_SMOOTHING = 0.12  # mm
-KLIPPER_DAMPINGS = (0.075, 0.1, 0.15)
+DEFAULT_ACCEL = 5000.0  # mm/s^2, where smoothing and the score are taken
+DEFAULT_MAX_SMOOTHING = 0.12  # mm, TARGET_SMOOTHING of find_shaper_max_accel
 
 
 def residual(times, amplitudes, freq, dampings) -> np.ndarray:
-    """V (percent residual vibration as a fraction) of impulse sets at frequencies and dampings.
+    """V (module docstring) of impulse sets at frequencies and dampings.
 
     ``times`` and ``amplitudes`` are (..., n) arrays (a batch of designs), ``freq`` (m,) Hz, ``dampings``
-    (z,); returns (..., m, z). Computed relative to the last impulse, so long shapers do not overflow.
+    (z,); returns (..., m, z). Measured from the last impulse, as Klipper does, so nothing overflows.
+
+    >>> float(residual([0.0, 0.01], [1.0, 1.0], [50.0], [0.0])[0, 0]) < 1e-12  # ZV at 50 Hz
+    True
     """
     t = np.asarray(times, dtype=float)[..., None, None, :]
     a = np.asarray(amplitudes, dtype=float)[..., None, None, :]
@@ -59,7 +73,11 @@ def residual(times, amplitudes, freq, dampings) -> np.ndarray:
 def residual_sampled(taps, ts: float, freq, dampings) -> np.ndarray:
     """``residual`` of taps at k ts, (m, z): sum_k a_k e^{(zeta w + j w_d)(t_k - t_N)} by Horner's rule in
     w = e^{-(zeta w + j w_d) ts} (|w| <= 1, so nothing overflows), one complex multiply-add per tap
-    instead of an exponential."""
+    instead of an exponential.
+
+    >>> float(residual_sampled([1.0, 1.0], 0.01, [50.0], [0.0])[0, 0]) < 1e-12
+    True
+    """
     taps = np.asarray(taps, dtype=float)
     w = 2 * np.pi * np.asarray(freq, dtype=float)[:, None]
     z = np.asarray(dampings, dtype=float)[None, :]
@@ -71,45 +89,80 @@ def residual_sampled(taps, ts: float, freq, dampings) -> np.ndarray:
 
 
 class VibrationMeter:
-    """Klipper's remaining-vibration metric (module docstring) for one spectrum and damping set,
-    prepared once and applied to batches of V."""
+    """Klipper's remaining vibration (module docstring) on one spectrum, prepared once and applied to
+    batches of V.
 
-    def __init__(self, freq, psd, dampings=KLIPPER_DAMPINGS, max_gain: float = 1.0):
+    ``max_freq`` is where the spectrum is cut (Klipper: max(200 Hz, the shaper's frequency)).
+    ``max_gain`` bounds V over the designs judged (1 for impulses of one sign, |V| <= 1): a bin with
+    P max_gain <= T can never count and is left out before any work.
+
+    >>> meter = VibrationMeter([10.0, 20.0, 30.0], [1.0, 10.0, 1.0])
+    >>> round(float(meter.remaining(np.full((3, 1), 0.5))), 12)  # T = 0.5: (5 - 0.5) / (0.5 + 9.5 + 0.5)
+    0.428571428571
+    """
+
+    def __init__(self, freq, psd, dampings=KLIPPER_DAMPINGS, max_freq: float = MAX_FREQ, max_gain: float = 1.0):
         freq, psd = np.asarray(freq, dtype=float), np.asarray(psd, dtype=float)
+        within = freq <= max_freq
+        freq, psd = freq[within], psd[within]
+        if not freq.size or not np.all(np.isfinite(psd)) or float(psd.max()) <= 0:
+            raise ValueError(f"the spectrum up to {max_freq:g} Hz must hold finite powers, some > 0, to judge a shaper on")
         self.threshold = float(psd.max()) * THRESHOLD_SHARE
         self.total = float(np.maximum(psd - self.threshold, 0).sum())
         keep = psd * max_gain > self.threshold
         self.freq, self.psd = freq[keep], psd[keep]
         self.dampings = tuple(float(z) for z in dampings)
 
-    def remaining(self, v_max) -> np.ndarray:
-        """R for V_max given at ``self.freq`` (..., m) -> (...)."""
-        if self.total <= 0:
-            return np.zeros(np.shape(v_max)[:-1])
-        return np.maximum(self.psd * v_max - self.threshold, 0).sum(axis=-1) / self.total
+    def remaining(self, v) -> np.ndarray:
+        """R for V given at ``self.freq`` and ``self.dampings``, (..., m, z) -> (...): the worst over the
+        dampings of the share left at each."""
+        if self.total <= 0:  # a flat spectrum: nothing stands above the threshold
+            return np.zeros(np.shape(v)[:-2])
+        left = np.maximum(self.psd[:, None] * v - self.threshold, 0).sum(axis=-2)
+        return left.max(axis=-1) / self.total
 
 
-def _centre_sums(times, amplitudes):
+def _moments(times, amplitudes):
+    """(sum A d, sum A d^2 over the impulses at or after the centre; sum A d^2 over all) / sum A."""
     t = np.asarray(times, dtype=float)
     a = np.asarray(amplitudes, dtype=float)
-    gain = a.sum(axis=-1, keepdims=True)
-    centre = (a * t).sum(axis=-1, keepdims=True) / gain
-    d = np.maximum(t - centre, 0.0)
-    return (a * d).sum(axis=-1) / gain[..., 0], (a * d * d).sum(axis=-1) / gain[..., 0]
+    gain = a.sum(axis=-1)
+    d = t - (a * t).sum(axis=-1, keepdims=True) / gain[..., None]
+    late = d >= 0
+    return ((a * d * late).sum(axis=-1) / gain, (a * d * d * late).sum(axis=-1) / gain,
+            (a * d * d).sum(axis=-1) / gain)
 
 
 def smoothing(times, amplitudes, accel: float = DEFAULT_ACCEL, scv: float = DEFAULT_SCV) -> np.ndarray:
-    """The smoothing s (mm) of impulse sets (..., n) at acceleration ``accel`` (mm/s^2) and
-    square-corner velocity ``scv`` (mm/s); module docstring."""
-    s1, s2 = _centre_sums(times, amplitudes)
-    return np.maximum(math.sqrt(2) * (scv * s1 + 0.5 * accel * s2), 0.5 * accel * s2)
+    """Klipper's smoothing (mm) of impulse sets (..., n) at ``accel`` (mm/s^2) and square-corner
+    velocity ``scv`` (mm/s); module docstring.
+
+    >>> float(smoothing([0.0, 0.01], [1.0, 1.0], 5000.0, 5.0))  # d = -+5 ms: s180 = 2500 * 2.5e-5 > s90
+    0.0625
+    """
+    s1, s2_late, s2_all = _moments(times, amplitudes)
+    return np.maximum(math.sqrt(2) * (scv * s1 + 0.5 * accel * s2_late), 0.5 * accel * s2_all)
 
 
 def max_accel(times, amplitudes, max_smoothing: float = DEFAULT_MAX_SMOOTHING, scv: float = DEFAULT_SCV) -> np.ndarray:
     """The largest acceleration (mm/s^2) at which ``smoothing`` stays at or under ``max_smoothing``
-    (0 if the square-corner velocity alone exceeds it): both terms are linear in a."""
-    s1, s2 = _centre_sums(times, amplitudes)
-    s2 = np.maximum(s2, 1e-300)
-    corner = (max_smoothing / math.sqrt(2) - scv * s1) * 2 / s2
-    reversal = 2 * max_smoothing / s2
+    (0 if the square-corner velocity alone exceeds it): both terms are linear in a.
+
+    >>> float(max_accel([0.0, 0.01], [1.0, 1.0]))  # the reversal binds: 2 * 0.12 / 2.5e-5
+    9600.0
+    """
+    s1, s2_late, s2_all = _moments(times, amplitudes)
+    with np.errstate(divide="ignore"):
+        corner = (max_smoothing / math.sqrt(2) - scv * s1) * 2 / s2_late
+        reversal = 2 * max_smoothing / s2_all
     return np.maximum(np.minimum(corner, reversal), 0.0)
+
+
+def score(smoothing_mm, vibration) -> np.ndarray:
+    """Klipper's score: smoothing * (R^1.5 + 0.2 R + 0.01).
+
+    >>> round(float(score(0.1, 0.04)), 12)  # 0.1 (0.008 + 0.008 + 0.01)
+    0.0026
+    """
+    v = np.asarray(vibration, dtype=float)
+    return np.asarray(smoothing_mm, dtype=float) * (v**1.5 + 0.2 * v + 0.01)

@@ -1,229 +1,112 @@
-"""The shaper for a machine, from its measured spectra: every family the design layer has, each at
-its best frequencies for the data, ranked on Klipper's own metrics (``metrics``).
+"""The shaper for a machine, from its measured spectra, judged by Klipper's own measures (``metrics``)
+and expressed in what the user's firmware runs (``firmware``): Klipper's pick beside ours.
 
-Candidates:
+1. Klipper's pick (``klipper.pick``): what Klipper's calibrate_shaper.py recommends on these spectra,
+   the baseline every design is measured against.
+2. The candidates the target can run (``families``): Klipper's six at any frequency (``klipper``),
+   RepRapFirmware's shapers and its custom shaper (``rrf``), Marlin's (``marlin``), or anything a
+   Shaper / ShapeFilter FMU builds (``fmu``); for ``rrf`` and ``fmu`` also a train of 5 impulses designed
+   for the spectrum under Klipper's pick's budget (``trains``), and Klipper's pick itself where the
+   target can run it (as RRF's custom shaper, or the impulses for ``fmu``).
+3. The guards, on every candidate: (a) no impulse below 2 % of the total (Klipper measures the
+   vibration left after the last impulse, so a negligible late impulse fakes a win); (b) on the spectra
+   with their frequency axis scaled by 0.97 and 1.03 (the machine drifts), no more vibration than
+   Klipper's pick leaves there plus 0.5 percentage points.
+4. The pick, by Klipper's measures: among the guarded candidates, the lowest score among those that
+   dominate Klipper's pick (no more vibration, no less max_accel); else the lowest score among those
+   that score no worse than it; else the lowest score (and the verdict says it is worse). Klipper's pick,
+   when the target can run it, dominates itself, so the pick is never worse on Klipper's score.
 
-- single-frequency impulse shapers (zv, mzv, zvd, zvdd, ei, ei2, ei3, zv_dn with n = 1, um_zv),
-  designed once at 1 Hz and scaled (an impulse shaper designed for (f, zeta) is the 1 Hz design with
-  its times divided by f), scanned over a log grid of 0.5 % steps from 0.5 times the lowest mode to
-  2 times the highest;
-- window shape filters of paper 000 (rectangle, hanning, blackman, hamming, three-hanning) sampled
-  at ``ts``, designed at each frequency of a 1 % grid;
-- multi-mode shapers for every pair of identified modes: the same single-mode kind at both modes,
-  convolved (paper 002), each frequency on a 3 % grid from 0.5 to 2.5 times its mode and then in
-  0.5 % steps around the best pair (the convolution's residual is the product of the two, at every
-  frequency and damping), and the simultaneous design (paper 002, eq. 20) at the pair, scaled
-  together in 0.5 % steps.
-
-A design is judged, worst case over every given spectrum (probe points, loads, axes), by its
-remaining vibration R, its smoothing at ``accel``, its largest acceleration for ``max_smoothing``,
-its duration and its residual at the identified modes (the worst V over the damping range at each
-mode: what a move of the machine keeps, the number a co-simulation checks).
-
-The pick. Klipper's six (zv, mzv, zvd, ei, ei2, ei3) at single frequencies are the baseline: among
-their best frequencies, the largest acceleration whose vibration is at most ``max_vibration`` (or the
-least vibration if none reaches it). The pick is then the candidate of any family with the largest
-acceleration among those with no more vibration than that baseline, so it never loses to it on
-either count; the table shows both.
+The table keeps, of each kind, the design this rule prefers; ``left_out`` names the kinds that could
+not be designed for these modes and why.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
-from itertools import combinations
+from dataclasses import dataclass
 
 import numpy as np
 
-from shapefmu.identification import metrics
+from shapefmu.identification import families, firmware, klipper, metrics, trains
+from shapefmu.identification.judge import Candidate, Judge
 from shapefmu.identification.modes import Mode
-from shapefmu.identification.spectra import Spectrum
 
-KLIPPER_SIX = ("zv", "mzv", "zvd", "ei", "ei2", "ei3")
-SINGLE_KINDS = (*KLIPPER_SIX, "zvdd", "zv_dn", "um_zv")
-WINDOW_KINDS = ("rectangle", "hanning", "blackman", "hamming", "three-hanning")
-PAIR_KINDS = ("zv", "mzv", "zvd", "ei", "ei2", "ei3")
 MAX_SPECTRA = 64
 MAX_BINS = 200_000
-DEFAULT_MAX_VIBRATION = 0.05
 DEFAULT_TS = 1e-3
-VTOL = 0.05
-
-
-@dataclass(frozen=True)
-class Candidate:
-    """One design and its scores. ``kind`` names a Shaper FMU kind (impulse shapers; ``simultaneous``)
-    or a ShapeFilter kind (``family == "window"``); ``frequencies`` (Hz) and ``zetas`` are the modes it
-    is designed for; ``ts`` the sampling period of a window filter."""
-
-    kind: str
-    family: str
-    frequencies: tuple[float, ...]
-    zetas: tuple[float, ...]
-    vibration: float
-    at_modes: float
-    smoothing: float
-    max_accel: float
-    duration: float
-    times: tuple[float, ...] = field(repr=False)
-    amplitudes: tuple[float, ...] = field(repr=False)
-    ts: float | None = None
-
-    @property
-    def label(self) -> str:
-        if self.family == "pair":
-            return f"{self.kind} x2"
-        return self.kind
-
-    def row(self) -> dict:
-        return {"shaper": self.label, "family": self.family, "frequencies_hz": list(self.frequencies),
-                "zetas": list(self.zetas), "vibration": self.vibration, "residual_at_modes": self.at_modes,
-                "smoothing_mm": self.smoothing, "max_accel": self.max_accel, "duration_s": self.duration,
-                **({"ts": self.ts} if self.ts is not None else {})}
+TRAIN_IMPULSES = 5  # RepRapFirmware's custom shaper holds at most 5
+GUARD_SHARE = trains.MIN_SHARE
+GUARD_DRIFT = 0.005  # (b): 0.5 percentage points
+MODE_FREQ = (1.0, 1000.0)  # Hz: modes a recommendation is made for
+SMOOTHING_RANGE = (0.05, 10.0)  # mm: Klipper refuses a max_smoothing below 0.05
+ACCEL_RANGE = (1.0, 1e6)  # mm/s^2: where smoothing and the score are taken
+TS_RANGE = (1e-5, 1e-2)  # s: the window filters' sampling period
 
 
 @dataclass(frozen=True)
 class Recommendation:
-    """The ranked ``candidates`` (the best frequency of every family, largest acceleration first
-    among those within the vibration bound), the ``pick`` and the Klipper-six ``baseline``, and the
-    settings they were judged with."""
+    """The ranked ``candidates`` (one per kind, by the pick rule), the ``pick``, ``klipper_pick``
+    (Klipper's own recommendation on the same spectra), the ``verdict`` on the pick against it
+    (dominates, better score, Klipper's pick, worse), the kinds ``left_out`` and the settings."""
 
+    firmware: str
     candidates: tuple[Candidate, ...]
     pick: Candidate
-    baseline: Candidate
+    klipper_pick: Candidate
+    verdict: str
+    left_out: tuple[str, ...]
     modes: tuple[Mode, ...]
     dampings: tuple[float, ...]
     accel: float
     scv: float
     max_smoothing: float
-    max_vibration: float
-    bound: float
+    max_freq: float
     designs_scored: int
 
     def to_json(self) -> dict:
-        return {"pick": self.pick.row(), "baseline_klipper_six": self.baseline.row(),
-                "candidates": [c.row() for c in self.candidates],
+        return {"firmware": self.firmware, "pick": self.pick.row(), "klipper_pick": self.klipper_pick.row(),
+                "verdict": self.verdict, "candidates": [c.row() for c in self.candidates],
+                "left_out": list(self.left_out),
                 "modes": [{"frequency_hz": m.frequency, "zeta": m.zeta, "frequency_sd": m.frequency_sd,
                            "zeta_sd": m.zeta_sd, "method": m.method} for m in self.modes],
                 "settings": {"dampings": list(self.dampings), "accel": self.accel, "scv": self.scv,
-                             "max_smoothing": self.max_smoothing, "max_vibration": self.max_vibration,
-                             "vibration_bound": self.bound}}
+                             "max_smoothing": self.max_smoothing, "max_freq": self.max_freq,
+                             "guards": {"min_impulse_share": GUARD_SHARE, "drifts": list(trains.DRIFTS),
+                                        "drift_allowance": GUARD_DRIFT}}}
 
 
-def _unit_design(kind: str, zeta: float):
-    """(times, amplitudes) of ``kind`` designed for 1 Hz."""
-    from shapefmu.shapers.catalog import design
-
-    shaper = design(kind, [(2 * math.pi, zeta)], vtol=VTOL, n=1)
-    return np.asarray(shaper.times), np.asarray(shaper.amplitudes)
-
-
-class _RatioTable:
-    """V(r, zeta) of a design at frequency ratios r = f / f_design: an impulse shaper designed for f_d
-    is its 1 Hz design with times / f_d, so its residual at f depends on f / f_d alone. Tabulated on a
-    log grid of 0.075 % steps and interpolated: a scan over thousands of designs costs one table."""
-
-    GRID = np.linspace(math.log(1 / 20), math.log(20), 8_001)
-
-    def __init__(self, times, amplitudes, dampings):
-        self.values = metrics.residual(times, amplitudes, np.exp(self.GRID), dampings)  # (grid, zeta)
-
-    def __call__(self, ratio) -> np.ndarray:
-        """V at ``ratio`` (any shape) -> (..., zeta)."""
-        x = np.log(np.asarray(ratio, dtype=float))
-        return np.stack([np.interp(x, self.GRID, self.values[:, k]) for k in range(self.values.shape[1])], axis=-1)
+def _unusable(mode: Mode) -> str | None:
+    """Why no recommendation can be made for ``mode``, or None."""
+    if not (math.isfinite(mode.frequency) and MODE_FREQ[0] <= mode.frequency <= MODE_FREQ[1]):
+        return f"mode frequency must be in [{MODE_FREQ[0]:g}, {MODE_FREQ[1]:g}] Hz, got {float(mode.frequency):g}"
+    if not (math.isfinite(mode.zeta) and 0 <= mode.zeta < 1):
+        return f"mode damping ratio must be in [0, 1), got {float(mode.zeta):g}"
+    return None
 
 
-class _SampledCurve:
-    """V of one sampled filter on a log grid of 1 % steps over 1..2000 Hz, interpolated: a window
-    filter of tens of taps varies over tens of hertz, and the spectra hold about a thousand bins."""
-
-    GRID = np.linspace(0.0, math.log(2000.0), int(math.log(2000.0) / 0.01) + 1)
-
-    def __init__(self, taps, ts, dampings):
-        self.values = metrics.residual_sampled(taps, ts, np.exp(self.GRID), dampings)  # (grid, zeta)
-
-    def __call__(self, freq) -> np.ndarray:
-        x = np.log(np.maximum(np.asarray(freq, dtype=float), 1.0))
-        columns = [np.interp(x, self.GRID, self.values[:, k]) for k in range(self.values.shape[1])]
-        return np.stack(columns, axis=-1)[None]
+def check_modes(modes) -> tuple[Mode, ...]:
+    """``modes`` if a recommendation can be made for every one (each in ``MODE_FREQ`` Hz with a damping
+    ratio in [0, 1)), else a one-line error naming the value."""
+    modes = tuple(modes)
+    if not modes:
+        raise ValueError("recommend needs at least one mode")
+    for m in modes:
+        if _unusable(m):
+            raise ValueError(_unusable(m))
+    return modes
 
 
-class _Judge:
-    """The metrics of designs against every spectrum (worst case) and at the identified modes."""
-
-    def __init__(self, spectra, dampings, modes, accel, scv, max_smoothing):
-        self.meters = [metrics.VibrationMeter(s.freq, s.psd, dampings, max_gain=3.0) for s in spectra]
-        self.dampings = dampings
-        self.mode_freqs = np.array([m.frequency for m in modes]) if modes else np.zeros(0)
-        self.accel, self.scv, self.max_smoothing = accel, scv, max_smoothing
-
-    def remaining(self, v_of) -> np.ndarray:
-        """Worst R over the spectra; ``v_of(freq)`` gives V (..., len(freq), zeta) of the batch."""
-        worst = None
-        for meter in self.meters:
-            r = meter.remaining(v_of(meter.freq).max(axis=-1))
-            worst = r if worst is None else np.maximum(worst, r)
-        return worst
-
-    def judge(self, kind, family, frequencies, zetas, times, amplitudes, v_of):
-        """Candidates for a batch (rows of ``times``), ``frequencies`` a list of tuples; ``v_of(freq)``
-        gives the batch's V (a ratio table or a sampled curve)."""
-        ts = float(times[0][1] - times[0][0]) if family == "window" else None
-        vib = self.remaining(v_of)
-        at = (v_of(self.mode_freqs).max(axis=(-1, -2)) if self.mode_freqs.size
-              else np.zeros(len(frequencies)))
-        smooth = metrics.smoothing(times, amplitudes, self.accel, self.scv)
-        accel = metrics.max_accel(times, amplitudes, self.max_smoothing, self.scv)
-        return [Candidate(kind, family, tuple(float(f) for f in frequencies[i]), tuple(zetas), float(vib[i]),
-                          float(at[i]), float(smooth[i]), float(accel[i]), float(times[i][-1]),
-                          tuple(map(float, times[i])), tuple(map(float, amplitudes[i])),
-                          ts if family == "window" else None)
-                for i in range(len(frequencies))]
+def usable_modes(modes) -> tuple[tuple[Mode, ...], tuple[str, ...]]:
+    """(the identified modes a recommendation can be made for, why each other one is set aside)."""
+    kept = tuple(m for m in modes if not _unusable(m))
+    return kept, tuple(f"the mode at {float(m.frequency):.2f} Hz is set aside: {_unusable(m)}" for m in modes
+                       if _unusable(m))
 
 
-def _grid(low, high, step):
-    return np.exp(np.arange(math.log(low), math.log(high) + step / 2, step))
-
-
-def _best(points, bound):
-    """The largest acceleration with vibration <= bound (1e-12 slack), else the least vibration."""
-    within = [p for p in points if p.vibration <= bound + 1e-12]
-    if within:
-        return max(within, key=lambda p: (p.max_accel, -p.vibration))
-    return min(points, key=lambda p: (p.vibration, -p.max_accel))
-
-
-def _pair_scan(judge, kind, m1, m2, r1, r2, dampings) -> list[Candidate]:
-    """The convolution of ``kind`` at m1.frequency * r1 and m2.frequency * r2 (every pair)."""
-    g1, g2 = m1.frequency * np.asarray(r1), m2.frequency * np.asarray(r2)
-    ta, aa = _unit_design(kind, min(m1.zeta, 0.5))
-    tb, ab = _unit_design(kind, min(m2.zeta, 0.5))
-    table_a, table_b = _RatioTable(ta, aa, dampings), _RatioTable(tb, ab, dampings)
-
-    def v_of(freq):
-        # a convolution's residual is the product of its factors' at every frequency and damping
-        va = table_a(freq[None, :] / g1[:, None])  # (g1, freq, zeta)
-        vb = table_b(freq[None, :] / g2[:, None])
-        return (va[:, None] * vb[None, :]).reshape(g1.size * g2.size, freq.size, len(dampings))
-
-    times = ta[None, None, :, None] / g1[:, None, None, None] + tb[None, None, None, :] / g2[None, :, None, None]
-    amps = np.broadcast_to(aa[:, None] * ab[None, :], times.shape)
-    times, amps = times.reshape(g1.size * g2.size, -1), amps.reshape(g1.size * g2.size, -1)
-    order = np.argsort(times, axis=1)
-    times, amps = np.take_along_axis(times, order, 1), np.take_along_axis(amps, order, 1)
-    pairs = [(a, b) for a in g1 for b in g2]
-    return judge.judge(kind, "pair", pairs, (m1.zeta, m2.zeta), times, amps, v_of)
-
-
-def recommend(spectra, modes, *, dampings=None, accel: float = metrics.DEFAULT_ACCEL,
-              scv: float = metrics.DEFAULT_SCV, max_smoothing: float = metrics.DEFAULT_MAX_SMOOTHING,
-              max_vibration: float = DEFAULT_MAX_VIBRATION, ts: float = DEFAULT_TS, windows: bool = True,
-              f_range: tuple[float, float] | None = None, progress=None) -> Recommendation:
-    """Rank every family on ``spectra`` (one or more ``Spectrum``) for the identified ``modes`` (see the
-    module docstring). ``dampings`` default to Klipper's (0.075, 0.1, 0.15) widened to hold every
-    identified damping; designs use the median identified damping (0.1 without modes)."""
-    spectra = [spectra] if isinstance(spectra, Spectrum) else list(spectra)
+def _check(spectra, modes, firmware_name, accel, scv, max_smoothing, ts):
+    if firmware_name not in firmware.FIRMWARES:
+        raise ValueError(f"firmware must be one of {', '.join(firmware.FIRMWARES)}, got {firmware_name!r}")
     if not spectra:
         raise ValueError("recommend needs at least one spectrum")
     if len(spectra) > MAX_SPECTRA:
@@ -231,104 +114,157 @@ def recommend(spectra, modes, *, dampings=None, accel: float = metrics.DEFAULT_A
     bins = sum(s.freq.size for s in spectra)
     if bins > MAX_BINS:
         raise ValueError(f"the spectra hold {bins} bins, more than the {MAX_BINS} judged at once; use a coarser resolution")
+    for s in spectra:
+        if not (np.all(np.isfinite(s.psd)) and np.all(np.isfinite(s.freq))):
+            raise ValueError(f"{s.source}: the spectrum holds a value that is not finite (an overflow in the recording?)")
+    check_modes(modes)
+    for value, name, (low, high), unit in ((accel, "accel (--accel)", ACCEL_RANGE, "mm/s^2"),
+                                           (ts, "the window filters' ts (--filter-ts)", TS_RANGE, "s")):
+        if not (math.isfinite(value) and low <= value <= high):
+            raise ValueError(f"{name} must be in [{low:g}, {high:g}] {unit}, got {value!r}")
+    if not (math.isfinite(max_smoothing) and SMOOTHING_RANGE[0] <= max_smoothing <= SMOOTHING_RANGE[1]):
+        raise ValueError(f"max_smoothing (--max-smoothing) must be in [{SMOOTHING_RANGE[0]:g}, {SMOOTHING_RANGE[1]:g}] "
+                         f"mm (Klipper refuses less than 0.05), got {max_smoothing!r}")
+    if not (math.isfinite(scv) and 0 <= scv <= 1000):
+        raise ValueError(f"scv (--scv) must be in [0, 1000] mm/s, got {scv!r}")
+
+
+class _Rule:
+    """The guards and the pick rule (module docstring) against Klipper's pick."""
+
+    def __init__(self, judge, reference):
+        self.reference = reference
+        self.drifted = [Judge([(f * s, p) for f, p in judge.spectra], dampings=judge.dampings, scv=judge.scv,
+                              accel=judge.accel, max_smoothing=judge.max_smoothing, max_freq=judge.max_freq)
+                        for s in trains.DRIFTS]
+        self.allowed = [float(j.vibration(np.array(reference.times)[None], np.array(reference.amplitudes)[None])[0])
+                        + GUARD_DRIFT for j in self.drifted]
+
+    @staticmethod
+    def shares_kept(amplitudes) -> np.ndarray:
+        """Guard (a) per row of ``amplitudes``: no impulse below 2 % of the total (the zero taps that lead
+        a window filter's row are no impulses)."""
+        amplitudes = np.asarray(amplitudes, dtype=float)
+        smallest = np.where(amplitudes != 0, amplitudes, np.inf).min(axis=-1)
+        return smallest >= GUARD_SHARE * amplitudes.sum(axis=-1)
+
+    def drift_kept(self, times, amplitudes) -> np.ndarray:
+        """Guard (b) per row of a batch."""
+        kept = np.ones(np.shape(times)[0], dtype=bool)
+        for judge, allowed in zip(self.drifted, self.allowed):
+            kept &= judge.vibration(times, amplitudes) <= allowed
+        return kept
+
+    def tiers(self, vibration, accel, score) -> np.ndarray:
+        """0: dominates Klipper's pick; 1: no worse a score; 2: worse (before the guards)."""
+        ref = self.reference
+        return np.where((vibration <= ref.vibration) & (accel >= ref.max_accel), 0, np.where(score <= ref.score, 1, 2))
+
+    def best(self, times, amplitudes, measures) -> tuple[int, bool]:
+        """(row, guarded) the rule prefers among designs that pass guard (a): in order of (tier, score),
+        the first that passes guard (b) among the first 20, else the first, unguarded."""
+        vibration, _, accel, score = measures
+        order = np.lexsort((score, self.tiers(vibration, accel, score)))[:20]
+        kept = np.flatnonzero(self.drift_kept(times[order], amplitudes[order]))
+        return (int(order[kept[0]]), True) if kept.size else (int(order[0]), False)
+
+
+def recommend(spectra, modes, *, firmware_name: str = "fmu", buildable: bool = False, axes=("x",),
+              dampings=metrics.KLIPPER_DAMPINGS, accel: float = metrics.DEFAULT_ACCEL,
+              scv: float = metrics.DEFAULT_SCV, max_smoothing: float = metrics.DEFAULT_MAX_SMOOTHING,
+              max_freq: float = metrics.MAX_FREQ, ts: float = DEFAULT_TS, progress=None) -> Recommendation:
+    """Klipper's pick and the pick for ``firmware_name`` on ``spectra`` (``Spectrum`` objects judged as
+    Klipper judges, e.g. ``klipper.read_spectrum_file``) for the identified ``modes``; module docstring.
+    ``buildable`` keeps to what a Shaper / ShapeFilter FMU holds (``fmu`` with ``--build``); ``axes``
+    name the axes in the firmware lines; ``max_freq`` is Klipper's (200 Hz, or its --max_freq)."""
+    spectra = list(spectra)
     modes = tuple(modes)
-    for value, name in ((accel, "accel"), (max_smoothing, "max_smoothing"), (ts, "ts")):
-        if not (math.isfinite(value) and value > 0):
-            raise ValueError(f"{name} must be a positive number, got {value!r}")
-    if not (math.isfinite(scv) and scv >= 0):
-        raise ValueError(f"scv must be a number >= 0 (mm/s), got {scv!r}")
-    if not (math.isfinite(max_vibration) and 0 < max_vibration <= 1):
-        raise ValueError(f"max_vibration must be a fraction in (0, 1], got {max_vibration!r}")
-    zetas = [m.zeta for m in modes]
-    if dampings is None:
-        dampings = tuple(sorted({*metrics.KLIPPER_DAMPINGS, *(round(min(z, 0.5), 4) for z in zetas)}))
-    dampings = tuple(float(z) for z in dampings)
-    if not dampings or any(not (0 <= z < 1) for z in dampings):
-        raise ValueError(f"dampings must be damping ratios in [0, 1), got {dampings!r}")
-    design_zeta = float(min(np.median(zetas), 0.5)) if zetas else 0.1
-    if f_range is None:
-        if modes:
-            f_range = (0.5 * min(m.frequency for m in modes), 2.0 * max(m.frequency for m in modes))
-        else:
-            f_range = (max(spectra[0].freq[0], 1.0), spectra[0].freq[-1])
-    judge = _Judge(spectra, dampings, modes, accel, scv, max_smoothing)
+    _check(spectra, modes, firmware_name, accel, scv, max_smoothing, ts)
     say = progress or (lambda text: None)
-    scans: dict[tuple[str, str], list[Candidate]] = {}
-
-    grid = _grid(*f_range, 0.005)
-    for kind in SINGLE_KINDS:
-        say(f"single-frequency {kind}: {grid.size} frequencies")
-        t1, a1 = _unit_design(kind, design_zeta)
-        table = _RatioTable(t1, a1, dampings)
-        times = t1[None, :] / grid[:, None]
-        amps = np.broadcast_to(a1, times.shape)
-        scans[(kind, "single")] = judge.judge(kind, "single", [(f,) for f in grid], (design_zeta,), times, amps,
-                                              lambda freq, table=table: table(freq[None, :] / grid[:, None]))
-
-    six = [_best(scans[(k, "single")], max_vibration) for k in KLIPPER_SIX]
-    baseline = _best(six, max_vibration)
-    bound = baseline.vibration if baseline.vibration <= max_vibration else max_vibration
-
-    if windows:
-        from shapefmu.shapers import window
-
-        coarse = _grid(*f_range, 0.02)
-        for kind in WINDOW_KINDS:
-            say(f"window filter {kind} at Ts = {ts:g} s: {coarse.size} frequencies")
-            design = {"rectangle": window.rectangle_filter, "hanning": window.hanning_filter,
-                      "blackman": window.blackman_filter, "hamming": window.hamming_filter,
-                      "three-hanning": window.three_hanning_filter}[kind]
-            points = []
-            for f in coarse:
-                try:
-                    shaper = design(2 * math.pi * f, design_zeta, ts, 1, adjust_ts=True)
-                except ValueError:
-                    continue  # too few samples per period at this frequency for this Ts
-                taps = np.asarray(shaper.taps)
-                times = (np.arange(taps.size) * shaper.ts)[None, :]
-                points += judge.judge(kind, "window", [(f,)], (design_zeta,), times, taps[None, :],
-                                      _SampledCurve(taps, shaper.ts, dampings))
-            if points:
-                scans[(kind, "window")] = points
-
-    for i, j in combinations(range(len(modes)), 2):
-        m1, m2 = modes[i], modes[j]
-        for kind in PAIR_KINDS:
-            say(f"two-mode {kind} x2 at {m1.frequency:.1f} and {m2.frequency:.1f} Hz")
-            # a 3 % grid over 0.5..2.5 of each mode, then 0.5 % steps around the best of it
-            coarse = _pair_scan(judge, kind, m1, m2, _grid(0.5, 2.5, 0.03), _grid(0.5, 2.5, 0.03), dampings)
-            near = _best(coarse, bound)
-            fine = _grid(0.97, 1.03, 0.005)
-            refined = _pair_scan(judge, kind, m1, m2, near.frequencies[0] / m1.frequency * fine,
-                                 near.frequencies[1] / m2.frequency * fine, dampings)
-            scans.setdefault((kind, "pair"), []).extend(coarse + refined)
-        say(f"two-mode simultaneous at {m1.frequency:.1f} and {m2.frequency:.1f} Hz")
-        from shapefmu.shapers.catalog import design as design_kind
-
-        try:
-            shaper = design_kind("simultaneous", [(m1.omega, min(m1.zeta, 0.5)), (m2.omega, min(m2.zeta, 0.5))])
-        except ValueError:
+    judge = Judge(spectra, dampings=dampings, scv=scv, accel=accel, max_smoothing=max_smoothing, max_freq=max_freq,
+                  modes=[(m.frequency, m.zeta) for m in modes])
+    say("Klipper's pick: its five shapers over its frequency scan")
+    best, _ = klipper.pick(judge)
+    ref_t, ref_a = klipper.SHAPERS[best.name].impulses(best.freq)
+    reference = judge.candidate(best.name, "klipper", (best.freq,), (klipper.DEFAULT_DAMPING_RATIO,), ref_t, ref_a,
+                                line=firmware.klipper_line(best.name, round(best.freq, 1), axes))
+    rule = _Rule(judge, reference)
+    top = max(max_freq, 2.0 * max(m.frequency for m in modes))
+    left_out: list[str] = []
+    batches = _batches(firmware_name, buildable, judge, reference, modes, top, axes, ts, left_out, say)
+    chosen, scored = [], 0
+    for batch in batches:
+        kept = np.flatnonzero(rule.shares_kept(batch.amplitudes))
+        if not kept.size:  # guard (a) holds for none: not worth judging
+            left_out.append(f"{batch.kind} ({batch.family}): every design has an impulse below 2 % of the total")
             continue
-        scale = _grid(0.6, 1.6, 0.005)
-        # in units of mode 1: the design's times times f1 are those of a design with mode 1 at 1 Hz
-        table = _RatioTable(np.asarray(shaper.times) * m1.frequency, np.asarray(shaper.amplitudes), dampings)
-        times = np.asarray(shaper.times)[None, :] / scale[:, None]
-        amps = np.broadcast_to(np.asarray(shaper.amplitudes), times.shape)
-        scans.setdefault(("simultaneous", "multi"), []).extend(judge.judge(
-            "simultaneous", "multi", [(m1.frequency * s, m2.frequency * s) for s in scale], (m1.zeta, m2.zeta),
-            times, amps, lambda freq, table=table, f1=m1.frequency: table(freq[None, :] / (f1 * scale[:, None]))))
+        times, amplitudes = batch.times[kept], batch.amplitudes[kept]
+        measures = judge.measures(times, amplitudes)
+        scored += kept.size
+        row, guarded = rule.best(times, amplitudes, measures)
+        row = int(kept[row])
+        impulses = batch.amplitudes[row] if batch.ts is None else np.trim_zeros(batch.amplitudes[row], "f")  # or taps
+        chosen.append(judge.candidate(batch.kind, batch.family, batch.frequencies[row], batch.zetas, batch.times[row],
+                                      impulses, ts=None if batch.ts is None else float(batch.ts[row]),
+                                      line=batch.line(row) if batch.line else None,
+                                      fmu=batch.build(row) if batch.build else None, guarded=guarded))
+    if not chosen:
+        raise ValueError(f"no {firmware_name} design passes guard (a): each has an impulse below 2 % of the total")
+    first_of_kind = {}
+    for c in sorted(chosen, key=lambda c: (not c.guarded, int(rule.tiers(c.vibration, c.max_accel, c.score)), c.score)):
+        first_of_kind.setdefault((c.family, c.kind), c)
+    ranked = tuple(first_of_kind.values())
+    return Recommendation(firmware_name, ranked, ranked[0], reference, _verdict(ranked[0], reference),
+                          tuple(dict.fromkeys(left_out)),
+                          modes, judge.dampings, accel, scv, max_smoothing, max_freq, scored)
 
-    best = [_best(points, bound) for points in scans.values()]
-    within = sorted((c for c in best if c.vibration <= bound + 1e-12), key=lambda c: -c.max_accel)
-    rest = sorted((c for c in best if c.vibration > bound + 1e-12), key=lambda c: c.vibration)
-    ranked = tuple(within + rest)
-    pick = ranked[0] if within else baseline
-    scored = sum(len(points) for points in scans.values())
-    return Recommendation(ranked, pick, baseline, modes, dampings, accel, scv, max_smoothing, max_vibration, bound,
-                          scored)
+
+def _verdict(pick, reference) -> str:
+    if pick.same(reference):
+        return "Klipper's pick"
+    if not pick.guarded:
+        return "worse: no candidate passes the guards"
+    if pick.dominates(reference):
+        return "dominates Klipper's pick"
+    return "better score than Klipper's pick" if pick.score <= reference.score else "worse score than Klipper's pick"
+
+
+def _batches(target, buildable, judge, reference, modes, top, axes, ts, left_out, say) -> list[families.Batch]:
+    """The candidates' batches for ``target`` (module docstring)."""
+    train = None
+    own = families.Batch(reference.kind, "klipper", np.array([reference.frequencies]), reference.zetas,
+                         np.array([reference.times]), np.array([reference.amplitudes]), lambda i: reference.line,
+                         lambda i: families.klipper_fmu(reference.kind, reference.frequencies[0]))
+    if target == "klipper":
+        say("Klipper's six shapers at every 0.1 Hz")
+        return [*families.klipper_scan(top, axes), own]
+    if target == "marlin":
+        say("Marlin's shapers at every 0.1 Hz")
+        return families.marlin_scan(top, axes)
+    if target in ("rrf", "fmu") and not buildable:
+        say(f"a train of {TRAIN_IMPULSES} impulses designed for the spectrum")
+        train = trains.design(judge, (reference.times, reference.amplitudes), TRAIN_IMPULSES)
+        if train is None:
+            left_out.append("train: no train of 5 impulses met Klipper's pick's budget on these spectra")
+    if target == "rrf":
+        batches = families.rrf_scan(top)
+        batches.append(families.rrf_custom(f"custom ({reference.kind})", reference.times, reference.amplitudes,
+                                           reference.frequencies, reference.zetas))
+        if train is not None:
+            batches.append(families.rrf_custom("custom (train)", *train))
+        return batches
+    zeta = float(min(np.median([m.zeta for m in modes]), 0.5))
+    say("the design layer's shapers and filters")
+    batches = families.design_layer(modes, zeta, ts, left_out)
+    if buildable:  # Klipper's pick where an FMU holds it
+        return batches + ([own] if own.build(0) else [])
+    batches.append(own)
+    if train is not None:
+        batches.append(families.Batch("train", "train", np.zeros((1, 0)), (), train[0][None], train[1][None]))
+    return batches
 
 
 def remaining_curve(candidate: Candidate, freq, dampings) -> np.ndarray:
-    """V_max(f) of a candidate: the share of each frequency's vibration that it leaves (for plots)."""
+    """V(f) of a candidate, worst over ``dampings``: the share of each frequency's vibration it leaves."""
     return metrics.residual(np.asarray(candidate.times)[None], np.asarray(candidate.amplitudes)[None],
                             freq, dampings).max(axis=-1)[0]

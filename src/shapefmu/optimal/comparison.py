@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
+from shapefmu.files import save_figure, write_text
 from shapefmu.optimal.moves import Command, _u_max, residual_after_move
 from shapefmu.optimal.solution import TimeOptimalSolution, time_optimal
 from shapefmu.plants import as_plant, rigid_part
@@ -55,12 +56,14 @@ def rigid_bang_bang(plant, distance: float, u_max: float | None = None, output=0
     return rigid.command
 
 
-def compare_moves(plant, distance: float, u_max: float | None = None, shapers=None, output=0) -> MoveComparison:
+def compare_moves(plant, distance: float, u_max: float | None = None, shapers=None, output=0,
+                  progress=None) -> MoveComparison:
     """Move time and residual vibration of the rigid bang-bang, of it convolved with each shaper,
     and of the time-optimal move, all simulated exactly on the full plant.
 
     ``shapers`` maps a name to an ``ImpulseShaper``; by default the convolution (ZV per mode) and
-    simultaneous shapers of paper 002 (Sec. II) for the plant's oscillatory modes.
+    simultaneous shapers of paper 002 (Sec. II) for the plant's oscillatory modes. ``progress``, a
+    function of one line of text, is told as each phase begins.
     """
     from shapefmu.shapers import convolve_modes, simultaneous
 
@@ -69,8 +72,11 @@ def compare_moves(plant, distance: float, u_max: float | None = None, shapers=No
     if shapers is None:
         modes = plant.flexible_modes()
         shapers = {"convolution (ZV per mode)": convolve_modes(modes), "simultaneous": simultaneous(modes)}
+    say = progress or (lambda text: None)
+    say("rigid bang-bang of the plant's rigid part")
     rigid = rigid_bang_bang(plant, distance, u_max, output)
-    optimal = time_optimal(plant, distance, u_max, output)
+    optimal = time_optimal(plant, distance, u_max, output, progress=progress)
+    say(f"simulating {len(shapers) + 2} moves on the full plant")
     candidates = [("rigid bang-bang", rigid)]
     candidates += [(f"bang-bang * {name}", rigid.shaped(shaper)) for name, shaper in shapers.items()]
     candidates.append(("time-optimal", optimal.command))
@@ -109,17 +115,19 @@ def plot_comparison(comparison: MoveComparison, plant, path) -> None:
         axes[2].legend(fontsize="small")
     axes[-1].set_xlabel("time [s]")
     fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
+    try:
+        save_figure(fig, path)
+    finally:
+        plt.close(fig)
 
 
 def optimal_report(path, distance: float, u_max: float | None = None, plot=None, json_path=None,
-                   csv_path=None) -> str:
+                   csv_path=None, progress=None) -> str:
     """The text of ``shapefmu optimal FILE --distance X [--u-max U] [--plot out.png] [--json s.json]
     [--csv u.csv]``; the JSON and CSV files are the solution's ``to_json`` and ``to_csv``, which
-    ``shapefmu build reference`` plays back."""
+    ``shapefmu build reference`` plays back; ``progress`` as in :func:`compare_moves`."""
     plant = as_plant(path)
-    comparison = compare_moves(plant, distance, u_max)
+    comparison = compare_moves(plant, distance, u_max, progress=progress)
     optimal = comparison.optimal
     lines = [comparison.table(), "",
              f"time-optimal: T = {optimal.T:.12g} s, {len(optimal.switch_times)} switches at "
@@ -127,10 +135,11 @@ def optimal_report(path, distance: float, u_max: float | None = None, plot=None,
              f"refined final-state residual {optimal.residual:.3e} (transcription T = {optimal.transcription_T:.10g} s)"]
     for target, text, what in ((json_path, optimal.to_json, "solution"), (csv_path, optimal.to_csv, "signal table")):
         if target is not None:
-            Path(target).parent.mkdir(parents=True, exist_ok=True)
-            Path(target).write_text(text())
+            write_text(target, text(), what)
             lines.append(f"{what} written to {target}")
     if plot is not None:
+        if progress is not None:
+            progress(f"plotting to {plot}")
         plot_comparison(comparison, plant, plot)
         lines.append(f"plot written to {plot}")
     return "\n".join(lines)

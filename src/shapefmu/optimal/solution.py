@@ -103,14 +103,15 @@ def _peak_scale(x, x_f, distance):
 
 
 def time_optimal(plant, distance: float, u_max: float | None = None, output=0, n_intervals: int = 100,
-                 n_samples: int = 2001, tolerance: float = 1e-9) -> TimeOptimalSolution:
+                 n_samples: int = 2001, tolerance: float = 1e-9, progress=None) -> TimeOptimalSolution:
     """The minimum-time rest-to-rest move of ``output`` by ``distance`` with |u| <= u_max.
 
     ``plant`` is a ``Plant``, a python-control LTI or a model file with one input; ``u_max``
     defaults to the plant's declared input limit. Every mode ends at rest: x(T) = x_f with
     (x_f, u_f) the rest state of ``rest_state``. The grid transcription (``lp_transcription``, at
     least ``n_intervals`` steps) finds the bang-bang structure; ``refine`` makes the switch times
-    exact; ``check_optimality`` verifies the result.
+    exact; ``check_optimality`` verifies the result. ``progress``, a function of one line of text, is
+    told as each of the two solver phases begins.
 
     Raises ValueError for u_max <= 0, a plant that is not controllable from its input, or a
     target that has no rest state within the limit. Warns (RuntimeWarning) if the refined move
@@ -118,7 +119,11 @@ def time_optimal(plant, distance: float, u_max: float | None = None, output=0, n
     than the grid's move (then it rests but is not the optimum: the structure was wrong).
     """
     plant = as_plant(plant)
+    if progress is not None:
+        progress(f"time-optimal move: bisecting the move time by linear programs on {n_intervals} intervals")
     grid = lp_transcription(plant, distance, u_max, n_intervals, output)
+    if progress is not None:
+        progress(f"time-optimal move: refining the switch times of the grid's {grid.T:.6g} s move")
     return refine_transcription(plant, grid, n_samples, tolerance)
 
 

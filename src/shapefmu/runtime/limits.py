@@ -57,6 +57,15 @@ MAX_COMPONENTS = 2_000
     with the connections, so 2000 start in seconds; 10^4 took minutes before the first step. (Past
     128 components the step loop runs in Python rather than compiled: gcc's time on the generated
     loop grows faster than its length; see ``cosim.step_program``.)
+MAX_ARRAY_ELEMENTS = 1_000_000
+    Elements of one array variable of an FMU the master loads (FMI 3.0 ``<Dimension>``), checked
+    when its model description is read. The master keeps a value per element in its set and get
+    buffers and a result column per recorded element; an FMU declaring 10^8 elements took 2.9 GB and
+    two minutes before a size error, 10^18 a MemoryError. 10^6 doubles are 8 MB.
+MAX_COMPILED_VALUES = 2_000
+    Values the compiled step loop moves along connections and records, element by element, each a
+    line of its C: gcc's time grows faster than that (500 took 0.3 s, 2000 1.7 s, 10^4 over 10 s), so
+    past it the step loop runs in Python, which starts at once (``cosim.step_program``).
 MAX_MACRO_STEPS = 2**53
     Macro steps of one co-simulation run. The master computes t_k = t0 + k h from the step count k
     in double precision, exact up to 2^53; a run that long (9e15 steps: 28 years at 10^7 steps per
@@ -73,13 +82,18 @@ MAX_WORKERS_PER_CORE = 4
 Sampled FMUs at run time (``runtime/sample_clock.py``; the native C FMUs use the same numbers)
 ----------------------------------------------------------------------------------------------
 SAMPLE_TOLERANCE = 1e-6 (relative to the sampling period Ts)
-    A sampled FMU takes its samples at s_k = t0 + k Ts (``runtime.sample_clock``). An instant s_k
-    counts as reached at time tau when s_k <= tau + SAMPLE_TOLERANCE * Ts, and tau is "on the grid"
-    when it lies within SAMPLE_TOLERANCE * Ts of s_k. Hosts keep time as ``t += h``: the drift of
-    that sum from k h, measured for h = 1e-5 .. 1e-3 s, is about 1e-10 Ts after 2000 steps, 1e-9 Ts
-    after 1e4, 2e-7 Ts after 1e5 and 2e-5 Ts after 1e6 steps. So up to a few 1e5 steps of Ts a
-    host's communication points count as the sample instants they stand for, and no sample is
-    skipped or taken twice. A step a host takes on purpose is far longer than 1e-6 Ts.
+    A sampled FMU takes its samples at s_k = t0 + k Ts, counted from the steps h the host takes, never
+    from its absolute time (``runtime.sample_clock``): instant k + j is reached when j Ts <= since + h
+    + SAMPLE_TOLERANCE Ts, ``since`` the time after instant k, and a step ends on the grid when what is
+    left is within SAMPLE_TOLERANCE Ts of 0. Summed steps are numbers of the size of Ts: a step of 0.7 Ts
+    is off 7/10 by about 1e-16 Ts, and each grid point resets the sum. A step a host takes on purpose is
+    far longer than 1e-6 Ts.
+AIMED_STEP_TOLERANCE = 0.25 (relative to Ts)
+    What the tolerance may grow to for a step a host aimed at an absolute instant (h = target - t, a
+    whole number of ulps of t): (m + 1) ulp(t) after m steps of its own since it last aimed at the
+    grid. At t = 1.7e9 an ulp is 2.4e-7 s: 2.4e-4 of Ts = 1 ms, but 2.4e-2 of the STOS controller's
+    Ts = 10 us, so a host that aims at its ticks there after a few steps of its own needs a tenth of
+    Ts. Past a quarter of Ts a host's time cannot tell its grid points apart.
 
 MAX_SAMPLES_PER_STEP = 10_000_000
     The most sample instants one ``fmi2DoStep`` may span. Each sample is one call of a Python
@@ -119,6 +133,8 @@ MAX_CONVOLUTION_PRODUCTS = 50_000_000
 MAX_PLANT_STATES = 200
 MAX_RK4_SUBSTEPS = 10_000_000
 MAX_COMPONENTS = 2_000
+MAX_ARRAY_ELEMENTS = 1_000_000
+MAX_COMPILED_VALUES = 2_000
 MAX_MACRO_STEPS = 2**53
 MAX_RESULT_BYTES = 2 * 2**30
 MAX_SWEEP_POINTS = 10_000_000
@@ -127,5 +143,6 @@ MAX_ARCHIVE_MEMBER_BYTES = 2**30
 MAX_ARCHIVE_BYTES = 4 * 2**30
 MAX_INPUT_FILE_BYTES = 2**30
 SAMPLE_TOLERANCE = 1e-6
+AIMED_STEP_TOLERANCE = 0.25
 MAX_SAMPLES_PER_STEP = 10_000_000
 PYTHON_STEP_SECONDS = 1.0

@@ -23,6 +23,15 @@ Communication points are usually accumulated (t += h), so a step meant to end on
 one rounding error before it. Times within ``1e-12`` of the table's time scale from a row's time
 are taken to be that time; without this a master stepping exactly onto a switch would see the old
 value at the switch and the new one a step late.
+
+Bounds. A table file is data from a user: its numbers must be JSON numbers (``"time": "012"`` is
+no list of times, ``true`` no value), and every number derived from them must be a finite double
+with room to spare: the widths between rows, the running integral (times of +-1e308 made it inf,
+which a native FMU's C cannot even hold) and the integral anywhere inside a row's segment stay
+within half the largest double, so that a difference of two of them is finite too. A step's mean
+inside one segment is that segment's own (no difference of large integrals), and the parts of a
+step before the first row or after the last are weighted by their share of the step, so that any
+finite step of a host, however far from the table, has a finite mean.
 """
 
 import bisect
@@ -30,11 +39,13 @@ import csv
 import io
 import json
 import math
+import sys
 
 from .checks import check_finite, parse_nested, read_text_file
 
 INTERPOLATIONS = ("hold", "linear")
 _SNAP = 1e-12
+_ROOM = sys.float_info.max / 2  # derived numbers stay below it, so that their differences are finite
 
 
 class SignalTable:
@@ -67,11 +78,21 @@ class SignalTable:
                 self._left.append(y)
                 self._right.append(y)
         scale = max(abs(self.times[0]), abs(self.times[-1]), self.times[-1] - self.times[0])
+        if not scale < _ROOM:
+            raise ValueError(f"the table spans times {self.times[0]!r} to {self.times[-1]!r}: its span must stay below "
+                             f"{_ROOM:.3g} s (every derived number a finite double)")
         self.tolerance = _SNAP * scale
         # Integral of the signal from the first time to each time, for exact step averages.
         self._integral = [0.0]
         for j in range(len(self.times) - 1):
             width = self.times[j + 1] - self.times[j]
+            # The integral anywhere in the segment lies within the larger value times its width of the
+            # integral at its start (hold, or a line between its ends).
+            reach = abs(self._integral[-1]) + width * max(abs(self._right[j]), abs(self._left[j + 1]))
+            if not reach < _ROOM:
+                raise ValueError(f"the table's running integral reaches {reach:.3g} between times {self.times[j]!r} and "
+                                 f"{self.times[j + 1]!r}: |value| x time must stay below {_ROOM:.3g} (every "
+                                 f"derived number a finite double)")
             self._integral.append(self._integral[-1] + width * self._segment_mean(j))
 
     def _segment_mean(self, j):
@@ -122,7 +143,18 @@ class SignalTable:
         a, b = self._snap(t_start), self._snap(t_end)
         if b == a:
             return self.value(a)
-        return (self.integral(b) - self.integral(a)) / (b - a)
+        j = self._segment(a)
+        if j == self._segment(b):  # one segment: its own mean, a constant or a line's midpoint
+            if j < 0:
+                return self.before
+            if j == len(self.times) - 1 or self.interpolation == "hold":
+                return self._right[j]
+            return 0.5 * (self.value(a) + self.value(b))
+        # The part inside the table by its integral, the parts before and after it by their share.
+        first, last = max(a, self.times[0]), min(b, self.times[-1])
+        width = b - a
+        return ((self.integral(last) - self.integral(first)) / width + (first - a) / width * self.before
+                + (b - last) / width * self._right[-1])
 
     def next_switch(self, t):
         """The first table time after ``t`` (beyond rounding), or inf: where a master may end a step."""
@@ -143,26 +175,47 @@ class SignalTable:
                 "time": times, "value": values}
 
 
+def _number(data, key, index=None):
+    """``data[key]`` (or its element ``index``) as a float: a JSON number, nothing else (a string, a
+    boolean, null are refused with the key named)."""
+    value = data[key] if index is None else data[key][index]
+    where = key if index is None else f"{key}[{index}]"
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ValueError(f"{where} must be a number, got {json.dumps(value)[:40]} (a {_json_type(value)})")
+    return check_finite(value, where)
+
+
+def _numbers(data, key):
+    """``data[key]``, a JSON list of numbers, as floats (``"time": 5`` or ``"012"`` refused, naming the key)."""
+    if not isinstance(data[key], list):
+        raise ValueError(f"{key} must be a list of numbers, got {json.dumps(data[key])[:40]} (a {_json_type(data[key])})")
+    return [_number(data, key, i) for i in range(len(data[key]))]
+
+
+def _json_type(value):
+    return {bool: "boolean", str: "string", type(None): "null", dict: "object", list: "list"}.get(type(value), "number")
+
+
 def from_dict(data):
-    """A table from a ``time_optimal`` (TimeOptimalSolution.to_dict) or ``signal_table`` JSON object."""
+    """A table from a ``time_optimal`` (TimeOptimalSolution.to_dict) or ``signal_table`` JSON object; every
+    number must be a JSON number (see the module docstring)."""
     if not isinstance(data, dict):
         raise ValueError(f"a signal table must be a JSON object, got {type(data).__name__}")
     kind = data.get("kind")
     try:
         if kind == "time_optimal":
-            switches = list(data["switch_times"])
-            times = [0.0, *switches, data["T"]]
-            values = [*data["levels"], data["u_final"]]
+            switches, levels = _numbers(data, "switch_times"), _numbers(data, "levels")
+            times = [0.0, *switches, _number(data, "T")]
+            values = [*levels, _number(data, "u_final")]
             if len(values) != len(switches) + 2:
                 raise ValueError(
                     f"a time_optimal solution needs len(levels) == len(switch_times) + 1, got "
-                    f"{len(data['levels'])} and {len(switches)}"
+                    f"{len(levels)} and {len(switches)}"
                 )
             return SignalTable(times, values, "hold")
         if kind == "signal_table":
-            return SignalTable(
-                list(data["time"]), list(data["value"]), data.get("interpolation", "hold"), data.get("before", 0.0)
-            )
+            before = _number(data, "before") if "before" in data else 0.0
+            return SignalTable(_numbers(data, "time"), _numbers(data, "value"), data.get("interpolation", "hold"), before)
     except KeyError as missing:
         raise ValueError(f"a {kind} object needs the field {missing}") from None
     raise ValueError(f"kind must be 'time_optimal' or 'signal_table', got {kind!r}")
@@ -194,7 +247,12 @@ def load(path, interpolation="hold"):
             data = parse_nested(json.loads, text, name)
         except json.JSONDecodeError as error:
             raise ValueError(f"{name} is not valid JSON: {error}") from None
-        return from_dict(data)
-    if name.lower().endswith(".csv"):
-        return from_csv(text, interpolation)
-    raise ValueError(f"path must end in .json or .csv, got {name!r}")
+        read = from_dict
+    elif name.lower().endswith(".csv"):
+        data, read = text, lambda csv_text: from_csv(csv_text, interpolation)
+    else:
+        raise ValueError(f"path must end in .json or .csv, got {name!r}")
+    try:
+        return read(data)
+    except ValueError as error:
+        raise ValueError(f"{name}: {error}") from None

@@ -15,7 +15,10 @@ and robustness order n is its n-fold self-convolution (eq. 1).
 Every function has the signature ``name(omega_n, zeta, ts, order=1, *, adjust_ts=False, ...)`` and
 returns ``(taps, ts)``: a list of floats summing to 1 and the sampling period actually used. The
 window length M follows from omega_d ts and must be an integer: a ts that does not make it one
-raises ValueError naming the nearest valid periods, unless ``adjust_ts`` picks the nearest.
+raises ValueError naming the nearest valid periods, unless ``adjust_ts`` picks the nearest. Adjusting
+rounds M, never more: a ts too long for the shortest window (M below its minimum by more than a
+half) is refused naming the longest ts that makes one, where it silently became that ts (a ts of
+1 s for a 40 Hz mode became 0.007 s).
 """
 
 import math
@@ -47,6 +50,10 @@ def window_length(omega_d, ts, adjust_ts, m_of_ts, ts_of_m, minimum, formula):
         m_real = math.inf
     check_size(m_real, "MAX_SAMPLED_LENGTH", f"ts = {ts!r} s gives a window of M = {formula} =", "samples",
                "use a longer ts")
+    if m_real < minimum - 0.5:
+        raise ValueError(f"ts = {ts!r} s gives a window of M = {formula} = {m_real:.3g} samples, fewer than the "
+                         f"{minimum} a window needs: ts must be at most {ts_of_m(minimum) / omega_d:.6g} s for "
+                         f"omega_d = {omega_d:.6g} rad/s")
     candidates = sorted({max(minimum, math.floor(m_real)), max(minimum, math.ceil(m_real))})
     nearest = min(candidates, key=lambda m: abs(ts_of_m(m) / omega_d - ts))
     ts_nearest = ts_of_m(nearest) / omega_d

@@ -35,7 +35,8 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from shapefmu.cosim.output_files import check_output, output_lock
+from shapefmu.cosim.output_files import output_lock
+from shapefmu.files import check_output
 from shapefmu.runtime import limits
 from shapefmu.runtime.checks import check_positive
 from shapefmu.sweep.metrics import _metric_list

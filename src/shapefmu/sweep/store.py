@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from shapefmu.cosim.output_files import check_output, replace_atomically
+from shapefmu.files import append_to, check_output, write_file
 from shapefmu.runtime.checks import read_text_file
 
 STATUSES = ("ok", "error", "timeout", "non-finite")
@@ -80,10 +80,10 @@ class Store:
         if not self.resume:
             for path in {self.out, self.journal}:
                 path.unlink(missing_ok=True)
-        elif self._complete_bytes is not None:
-            os.truncate(self.journal, self._complete_bytes)  # a sweep killed mid-write left a partial line
-        new = not self.journal.exists() or self.journal.stat().st_size == 0
-        self.file = open(self.journal, "a", newline="")
+        self.file = append_to(self.journal, "sweep journal")
+        if self.resume and self._complete_bytes is not None:
+            self.file.truncate(self._complete_bytes)  # a sweep killed mid-write left a partial line
+        new = os.fstat(self.file.fileno()).st_size == 0
         self.writer = csv.DictWriter(self.file, fieldnames=self.columns)
         if new:
             self.writer.writeheader()
@@ -146,7 +146,7 @@ class Store:
             pa = pyarrow_module()
             pa.parquet.write_table(pa.Table.from_pylist(rows, schema=_arrow_schema(pa, self.columns)), temporary)
 
-        replace_atomically(self.out, write_parquet if self.parquet else write_csv)
+        write_file(self.out, write_parquet if self.parquet else write_csv, "sweep output")
         if self.parquet:
             self.journal.unlink()
 

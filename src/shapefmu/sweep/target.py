@@ -13,7 +13,8 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from shapefmu.runtime.checks import check_positive
+from shapefmu.files import write_bytes
+from shapefmu.runtime.checks import check_positive, check_size
 
 try:
     from distributed import WorkerPlugin
@@ -62,6 +63,9 @@ def cosim(system, *, step: float, stop_time: float, record: Sequence[str], algor
         raise ValueError(f"system must be an .ssp or .ssd path or a shapefmu.fmi.ssp.System, got {type(system).__name__}")
     step = check_positive(step, "step")
     stop_time = check_positive(stop_time, "stop_time")
+    # the master's own bound, checked before any run is sent out (a denormal step: inf steps)
+    check_size(stop_time / step, "MAX_MACRO_STEPS", f"a run to {stop_time!r} s by steps of {step!r} s takes",
+               "macro steps", "take a longer step or a shorter run")
     record = (record,) if isinstance(record, str) else tuple(record)
     if not record:
         raise ValueError("record must name at least one variable, e.g. 'plant.theta_1'")
@@ -95,8 +99,7 @@ class _SystemFile(WorkerPlugin):
         directory = os.path.join(worker.local_directory, self.name)
         os.makedirs(directory, exist_ok=True)
         path = os.path.join(directory, self.file_name)
-        with open(path, "wb") as file:
-            file.write(self.data)
+        write_bytes(path, self.data, "system file")
         _FILES[self.digest] = path
 
 

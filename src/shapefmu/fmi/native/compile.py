@@ -34,12 +34,13 @@ from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
 
+from shapefmu.files import write_file
 from shapefmu.fmi.compiler import run_compiler
 
 # The generic FMI layers, one of them shipped in every native FMU's sources/: the version-neutral core
 # and the API of FMI 2.0 or 3.0 over it (layer_files).
 _CORE_SOURCES = ("layer_core.c", "layer_state.c", "fmu_liveness.c")
-_CORE_HEADERS = ("fmi2_model.h", "model_status.h", "layer_core.h", "fmu_liveness.h")
+_CORE_HEADERS = ("fmi2_model.h", "model_status.h", "layer_core.h", "fmu_liveness.h", "sample_clock.h")
 LAYER_SOURCES = ("fmi2_layer.c", "fmi2_layer_me.c", *_CORE_SOURCES)
 LAYER_HEADERS = ("fmi2_layer.h", *_CORE_HEADERS)
 FMI_VERSIONS = ("2.0", "3.0")
@@ -56,7 +57,9 @@ def layer_files(fmi_version: str) -> tuple[tuple[str, ...], tuple[str, ...]]:
         raise ValueError(f"fmi_version must be one of {', '.join(FMI_VERSIONS)}, got {fmi_version!r}")
     if fmi_version == "2.0":
         return LAYER_SOURCES, LAYER_HEADERS
-    return ("fmi3_layer.c", "fmi3_layer_me.c", "fmi3_layer_clock.c", *_CORE_SOURCES), ("fmi3_layer.h", *_CORE_HEADERS)
+    # the input clock counts its ticks by the sample grid's rule (sample_clock.c)
+    return (("fmi3_layer.c", "fmi3_layer_me.c", "fmi3_layer_clock.c", "sample_clock.c", *_CORE_SOURCES),
+            ("fmi3_layer.h", *_CORE_HEADERS))
 
 
 def write_layer(sources: Path, fmi_version: str, clock_interval: float = 0.0) -> list[str]:
@@ -221,15 +224,15 @@ def build_binaries(root: Path, identifier: str, c_files, what: str, fmi_version:
 
 
 def zip_fmu(root: Path, out_path: Path) -> Path:
-    """Zip the FMU folder ``root`` into ``out_path`` (written beside and moved, never half-written)."""
-    out_path.parent.mkdir(parents=True, exist_ok=True)
-    partial = out_path.with_name(out_path.name + ".partial")
-    with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as archive:
-        for path in sorted(root.rglob("*")):
-            if path.is_file():
-                archive.write(path, path.relative_to(root).as_posix())
-    shutil.move(partial, out_path)
-    return out_path
+    """Zip the FMU folder ``root`` into ``out_path`` (``shapefmu.files``: checked, never half-written)."""
+
+    def write(partial):
+        with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as archive:
+            for path in sorted(root.rglob("*")):
+                if path.is_file():
+                    archive.write(path, path.relative_to(root).as_posix())
+
+    return write_file(out_path, write, "FMU")
 
 
 def build_description(identifier: str, source_files) -> str:

@@ -104,7 +104,8 @@ def write_native_fmu(name: str, out_path, slave, variables, values: dict, depend
         sources = root / "sources"
         sources.mkdir()
         copy_c_files(sources, (*c_sources, *c_headers))
-        c_files = [*write_layer(sources, fmi_version, interval), *c_sources, MODEL_SOURCE]
+        # once each: the FMI 3.0 layer has the sample clock a sampled model part lists too
+        c_files = list(dict.fromkeys([*write_layer(sources, fmi_version, interval), *c_sources, MODEL_SOURCE]))
         digest = hashlib.md5(model_c("").encode())
         for file in sorted(p.name for p in sources.iterdir()):
             digest.update((sources / file).read_bytes())

@@ -24,8 +24,8 @@ from shapefmu.fmi.python.slaves.profile_generator import MAX_MODES
 from shapefmu.runtime import shaper_designs
 
 NAME = "ProfileGenerator"
-SOURCES = ("motion_fmi2.c", "motion_design.c", "exact_sum.c", "shaper_designs.c", "twin_variables.c")
-HEADERS = ("motion_model.h", "motion_design.h", "exact_sum.h", "shaper_designs.h", "twin_variables.h")
+SOURCES = ("motion_fmi2.c", "motion_design.c", "exact_sum.c", "sample_clock.c", "shaper_designs.c", "twin_variables.c")
+HEADERS = ("motion_model.h", "motion_design.h", "exact_sum.h", "sample_clock.h", "shaper_designs.h", "twin_variables.h")
 MAX_LEVELS = 1_000_000
 _MEANINGS = {"profile": "MOTION_PROFILE", "distance": "MOTION_DISTANCE", "speed": "MOTION_SPEED",
              "acceleration_limit": "MOTION_ACCELERATION_LIMIT", "shaper": "MOTION_SHAPER", "n": "MOTION_ORDER",

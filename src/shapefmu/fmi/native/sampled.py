@@ -30,7 +30,7 @@ from shapefmu.fmi.native.kernel_fmu import ROLES, c_string, number_by_type, writ
 from shapefmu.fmi.python.builder import designed_slave
 from shapefmu.fmi.python.slave_base import Variable
 
-SOURCES = ("sampled_fmi2.c", "sampled_fir.c", "shaper_designs.c")
+SOURCES = ("sampled_fmi2.c", "sampled_fir.c", "sample_clock.c", "shaper_designs.c")
 HEADERS = ("sampled_model.h", "sampled_fir.h", "sample_clock.h", "shaper_designs.h")
 NATIVE_NOTE = ("This FMU is the native C twin of the pythonfmu FMU of the same name: the same variables and "
                "sampled semantics, no Python needed. Its design was made at build time and is stored in its "

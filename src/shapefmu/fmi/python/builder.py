@@ -35,6 +35,7 @@ import zipfile
 from pathlib import Path
 
 from shapefmu import __version__
+from shapefmu.files import check_output, write_file
 from shapefmu.fmi.compiler import run_compiler
 from shapefmu.fmi.python.model_description import model_description
 from shapefmu.fmi.python.slaves import SLAVES
@@ -192,25 +193,26 @@ def build_fmu(name: str, out_path, **start_values) -> Path:
     xml = model_description(slave, guid, dependencies, slave.experiment(), pythonfmu_version)
     entry = f"{package}_{name}"
     build = {"guid": guid, "package": package, "start_values": baked, "dependencies": dependencies}
-    out_path.parent.mkdir(parents=True, exist_ok=True)
+    check_output(out_path, "FMU")
     with tempfile.TemporaryDirectory(prefix="shapefmu_build_") as temp:
         shim = compile_shim(Path(temp) / f"{name}.so", name, guid)
-        partial = out_path.with_name(out_path.name + ".partial")
-        with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as fmu:
-            fmu.writestr("modelDescription.xml", xml)
-            fmu.write(shim, f"binaries/linux64/{name}.so")
-            fmu.write(export_library, f"binaries/linux64/{name}_pythonfmu.so")
-            for source in SHIM_FILES:  # the record; hosts do not build it
-                fmu.write(source, f"resources/shim/{source.name}")
-            fmu.writestr("resources/slavemodule.txt", entry)
-            fmu.writestr(f"resources/{entry}.py", ENTRY_MODULE.format(name=name, package=package, module=SLAVES[name]))
-            fmu.writestr(f"resources/{BUILD_FILE}", json.dumps(build, indent=2))
-            for relative, content in files.items():
-                fmu.writestr(f"resources/{package}/{relative}", content)
-            for relative, content in _documentation(xml, name).items():
-                fmu.writestr(relative, content)
-        partial.replace(out_path)  # no half-written FMU is ever left under the final name
-    return out_path
+
+        def write(partial):
+            with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as fmu:
+                fmu.writestr("modelDescription.xml", xml)
+                fmu.write(shim, f"binaries/linux64/{name}.so")
+                fmu.write(export_library, f"binaries/linux64/{name}_pythonfmu.so")
+                for source in SHIM_FILES:  # the record; hosts do not build it
+                    fmu.write(source, f"resources/shim/{source.name}")
+                fmu.writestr("resources/slavemodule.txt", entry)
+                fmu.writestr(f"resources/{entry}.py", ENTRY_MODULE.format(name=name, package=package, module=SLAVES[name]))
+                fmu.writestr(f"resources/{BUILD_FILE}", json.dumps(build, indent=2))
+                for relative, content in files.items():
+                    fmu.writestr(f"resources/{package}/{relative}", content)
+                for relative, content in _documentation(xml, name).items():
+                    fmu.writestr(relative, content)
+
+        return write_file(out_path, write, "FMU")  # no half-written FMU is ever left under the final name
 
 
 def _documentation(xml: str, name: str) -> dict[str, bytes]:

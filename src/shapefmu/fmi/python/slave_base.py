@@ -38,8 +38,8 @@ How to add an FMU (one module and one registry line):
 4. ``step(self, t, h)``: advance the kernels over (t, t + h] and set the outputs. Raise ValueError
    for a step the FMU cannot honour. Inputs are already checked for NaN. Any h > 0 must be
    honoured (hosts trim their last step to 1e-16 s): a sampled FMU takes its samples on the
-   absolute grid with ``runtime.sample_clock.SampleClock`` (made in ``initialize`` with t0 =
-   ``self.time``, listed in ``kernels`` and ``state_attributes``), never by counting Ts in h.
+   grid t0 + k Ts with ``runtime.sample_clock.SampleClock`` (made in ``initialize``, listed in
+   ``kernels`` and ``state_attributes``), which counts them from the steps, never from the host's t.
 5. ``output_dependencies(self)``: after ``initialize``, ``{output: [inputs it feeds through from]}``;
    the builder writes it into ModelStructure (and InitialUnknowns).
 6. Add ``"<ModelName>": "<module>"`` to ``SLAVES`` in ``shapefmu/fmi/python/slaves/__init__.py``; then
@@ -378,6 +378,13 @@ class Fmi2Slave:
                 raise ValueError(f"unknown phase {phase!r}")
             if not isinstance(time, float) or set(kernels) != set(self.state_attributes):
                 raise ValueError("the state's time or kernels are malformed")
+            where = state_codec.first_non_finite({"time": time, "values": values, "kernels": kernels}, "state")
+            if where is not None:
+                raise ValueError(f"{where} is not a finite number (fmi2SetReal takes none)")
+            for name, kernel in kernels.items():
+                problem = kernel.state_problem() if hasattr(kernel, "state_problem") else None
+                if problem is not None:
+                    raise ValueError(f"{name}: {problem}")
         except Exception as error:  # noqa: BLE001 - whatever the state holds, it is refused, not raised
             self.error(f"fmi2SetFMUstate: {_describe(error)}")
             return

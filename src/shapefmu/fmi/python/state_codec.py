@@ -12,6 +12,7 @@ is tagged:
 """
 
 import json
+import math
 from collections import deque
 
 _TAG = "\u00a7"  # a key no kernel attribute uses
@@ -74,6 +75,29 @@ def decode(data, allowed):
         obj.__dict__.update(attributes)
         return obj
     raise ValueError(f"malformed FMU state: unknown tag {tag!r}")
+
+
+def first_non_finite(value, path):
+    """The path (below ``path``) of the first NaN or infinite float in a decoded state, or None.
+
+    Every number an FMU holds comes from values fmi2SetReal accepts and finite steps, so a state
+    holding NaN or inf was forged: restored, it would make NaN outputs.
+    """
+    if isinstance(value, float):
+        return None if math.isfinite(value) else path
+    if isinstance(value, dict):
+        entries = value.items()
+    elif isinstance(value, (list, tuple, deque)):
+        entries = enumerate(value)
+    elif hasattr(value, "__dict__"):  # a kernel decode rebuilt
+        entries = vars(value).items()
+    else:
+        return None
+    for key, item in entries:
+        found = first_non_finite(item, f"{path}.{key}")
+        if found is not None:
+            return found
+    return None
 
 
 def _items(data):

@@ -244,7 +244,7 @@ fmi2Status model_exit_initialization(Fmi2Instance *inst) {
     t->history.queued = fmi2_allocate(inst, EKF_QUEUES * (size_t)t->ekf.window, sizeof(long long));
     if (t->history.recent == NULL || t->history.queued == NULL)
         return fmi2_fail(inst, "%s: out of memory for a window of %lld samples", function, t->ekf.window);
-    clock_start(&t->clock, inst->start_time, ts);
+    clock_start(&t->clock, ts);
     t->failure = NULL;
     t->started = 1;
     inst->reals[t->vr[EKF_OUTPUT]] = 0.0;
@@ -259,12 +259,12 @@ fmi2Status model_update(Fmi2Instance *inst, const char *function) {
 
 fmi2Status model_do_step(Fmi2Instance *inst, double t_now, double h) {
     Tuner *t = tuner_of(inst);
-    const double reached = clock_reached(&t->clock, t_now + h), samples = reached - (double)t->clock.k;
-    if (samples > (double)MAX_SAMPLES_PER_STEP)
+    const GridStep step = grid_step(&t->clock.at, t->clock.ts, t_now, h);
+    if (step.count > (double)MAX_SAMPLES_PER_STEP)
         return fmi2_fail(inst, "fmi2DoStep: communication step h = %g s spans %.0f samples of Ts = %g s; at most %lld "
-                         "per step", h, samples, t->clock.ts, MAX_SAMPLES_PER_STEP);
+                         "per step", h, step.count, t->clock.ts, MAX_SAMPLES_PER_STEP);
     const double inputs[2] = {real_of(inst, EKF_COMMAND), real_of(inst, EKF_VIBRATION)};
-    clock_step_to(&t->clock, t_now + h, reached, inputs, 2, commit, t);
+    clock_take(&t->clock, &step, inputs, 2, commit, t);
     if (t->failure != NULL) return fmi2_fail(inst, "fmi2DoStep: at t = %g s: %s", t_now, t->failure);
     publish_estimates(inst);
     return fmi2OK;
@@ -391,7 +391,7 @@ int model_restore_state(Fmi2Instance *inst, const unsigned char *bytes, size_t s
     const long long window = header.ekf.window;
     if (window < 2 || window > EKF_MAX_WINDOW || header.ekf.count < 0 || header.ekf.count > window
         || header.ekf.slot < 0 || header.ekf.slot >= window || (header.ekf.converged != 0 && header.ekf.converged != 1) || header.kind < 0 || header.kind >= KIND_NOT_CLOSED_FORM || header.order < 0
-        || header.order > MAX_ORDER || !(header.clock.ts > 0.0) || !(header.h > 0.0))
+        || header.order > MAX_ORDER || !clock_valid(&header.clock, 2) || !(header.h > 0.0))
         return -1;
     const unsigned char *at = bytes + sizeof header, *end = bytes + size;
     if ((size_t)(end - at) < 2 * (size_t)window * sizeof(double)) return -1;

@@ -19,6 +19,7 @@
 #include <stddef.h>
 
 #include "model_status.h"
+#include "sample_clock.h" /* GridPosition */
 
 /* Longest String value a variable holds by default (its valid values are names, e.g. a design
  * kind); a model part holding longer text (a signal table) declares its own string_capacity. */
@@ -66,6 +67,7 @@ typedef struct Fmi2Instance {
     double time;                 /* the FMU's time: start time, then the end of the last step */
     double start_time;           /* fmi2SetupExperiment's startTime (0 if not called) */
     double clock_ticks;          /* ticks of the FMI 3.0 layer's input clock taken (--clock builds) */
+    GridPosition clock_position; /* and where the instance stands on the clock's grid, counted from its steps */
     double *reals;               /* every variable's value, indexed by value reference */
     int *integers, *booleans;
     char *strings;               /* n_string slots of info.string_capacity + 1 characters */

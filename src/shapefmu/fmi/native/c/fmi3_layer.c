@@ -176,6 +176,11 @@ static fmi3Instance instantiate(fmi3String name, fmi3String token, int model_exc
     else if (!model_exchange && fmi3_clocked() && !event_mode_used)
         why = "this FMU takes its samples at the ticks of its input clock 'sample' (built with --clock): instantiate it "
               "with eventModeUsed = fmi3True and tick the clock in Event Mode, or use the FMU built without --clock";
+    /* FMI 3.0 (fmi3InstantiateCoSimulation): eventModeUsed may be fmi3True only if hasEventMode is, else the
+     * FMU must fail; accepted, the host's first fmi3UpdateDiscreteStates would fail later, far from the cause. */
+    else if (!model_exchange && !fmi3_clocked() && event_mode_used)
+        why = "eventModeUsed = fmi3True, but this FMU has no Event Mode in Co-Simulation (hasEventMode=\"false\" in its "
+              "modelDescription.xml): instantiate it with eventModeUsed = fmi3False, or build it with --clock";
     Fmi3Layer *layer = why == NULL ? calloc(1, sizeof(Fmi3Layer)) : NULL;
     if (why == NULL && layer == NULL) why = "out of memory";
     Fmi2Instance *inst = NULL;
@@ -417,6 +422,7 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoi
     if (layer_of(inst)->clocked && fmi3_clock_before_step(inst, currentCommunicationPoint, communicationStepSize) != fmi3OK)
         return fmi3Error;
     if (core_do_step(inst, currentCommunicationPoint, communicationStepSize, "fmi3DoStep") != fmi2OK) return fmi3Error;
+    fmi3_clock_after_step(inst, currentCommunicationPoint, communicationStepSize);
     *lastSuccessfulTime = inst->time;
     return fmi3OK;
 }

@@ -46,6 +46,8 @@ int fmi3_scalar_slot(Fmi2Instance *inst, fmi3ValueReference vr, Fmi2Type type, s
 int fmi3_clocked(void);
 fmi3Status fmi3_clock_start(Fmi2Instance *inst, const char *function);
 fmi3Status fmi3_clock_before_step(Fmi2Instance *inst, double t, double h);
+/* After a step of a clocked instance: its position on the clock's grid moves with it. */
+void fmi3_clock_after_step(Fmi2Instance *inst, double t, double h);
 fmi3Status fmi3_clock_before_step_mode(Fmi2Instance *inst);
 
 #endif

@@ -12,7 +12,10 @@
  * grid, and a Ts other than the interval the model description declares.
  *
  * fmi3_clock.c, generated for each FMI 3.0 build, gives the interval (0: no clock). The ticks taken
- * are counted in the instance (clock_ticks), which FMU states save.
+ * are counted in the instance (clock_ticks), and where it stands on the ticks' grid (clock_position)
+ * is counted from its steps by the sample grid's rule (sample_clock.c), the rule the model part's
+ * samples follow: so a host at t0 = 1.7e9, whose times are 2.4e-7 s apart and drift as it adds its
+ * steps, ticks the clock where the model samples; FMU states save both.
  */
 #include <math.h>
 #include <string.h>
@@ -22,28 +25,14 @@
 /* The interval of the clock, 0 for an FMU without one (fmi3_clock.c, generated). */
 extern const double fmi3_clock_interval;
 
-/* A tick t0 + k Ts counts as reached at tau when it is <= tau + CLOCK_TOLERANCE Ts: the rule of the
- * sample grid (sample_clock.h's SAMPLE_TOLERANCE), so ticks and samples are the same instants. */
-#define CLOCK_TOLERANCE 1e-6
-
 int fmi3_clocked(void) { return fmi3_clock_interval > 0.0; }
 
 static fmi3ValueReference clock_reference(const Fmi2Instance *inst) {
     return (fmi3ValueReference)(layer_of(inst)->n_variables + 1);
 }
 
-/* The number of ticks at or before tau (K(tau) + 1 of the sample grid). */
-static double ticks_until(const Fmi2Instance *inst, double tau) {
-    const double ts = fmi3_clock_interval, t0 = inst->start_time, delta = CLOCK_TOLERANCE * ts;
-    double k = floor((tau - t0) / ts + CLOCK_TOLERANCE);
-    if (t0 + (k + 1.0) * ts <= tau + delta) k += 1.0;
-    else if (t0 + k * ts > tau + delta) k -= 1.0;
-    return k + 1.0;
-}
-
-static int on_tick(const Fmi2Instance *inst, double tau, double k) {
-    return fabs(tau - (inst->start_time + k * fmi3_clock_interval)) <= CLOCK_TOLERANCE * fmi3_clock_interval;
-}
+/* The instant of tick k as a host at t0 + k Ts computes it (for messages). */
+static double tick_time(const Fmi2Instance *inst, double k) { return inst->start_time + k * fmi3_clock_interval; }
 
 fmi3Status fmi3_clock_start(Fmi2Instance *inst, const char *function) {
     if (!layer_of(inst)->clocked) return fmi3OK;
@@ -61,20 +50,26 @@ fmi3Status fmi3_clock_start(Fmi2Instance *inst, const char *function) {
 }
 
 fmi3Status fmi3_clock_before_step(Fmi2Instance *inst, double t, double h) {
-    const double due = ticks_until(inst, t);
-    if (inst->clock_ticks < due)
+    const GridPosition *at = &inst->clock_position;
+    if (inst->clock_ticks < (double)at->k + 1.0)
         return FAIL("fmi3DoStep: the clock 'sample' was not ticked at t = %.17g (enter Event Mode and call fmi3SetClock "
-                    "at every tick t0 + k Ts, Ts = %g)", inst->start_time + (due - 1.0) * fmi3_clock_interval,
-                    fmi3_clock_interval);
-    const double next = inst->start_time + due * fmi3_clock_interval;
-    if (t + h > next + CLOCK_TOLERANCE * fmi3_clock_interval)
+                    "at every tick t0 + k Ts, Ts = %g)", tick_time(inst, (double)at->k), fmi3_clock_interval);
+    if (!isfinite(h) || !(h > 0.0)) return fmi3OK;  /* the layer's own checks answer it */
+    const GridStep step = grid_step(at, fmi3_clock_interval, t, h);
+    if (step.count > 1.0 || (step.count == 1.0 && step.since != 0.0))
         return FAIL("fmi3DoStep: the step from %.17g to %.17g passes the tick of the clock 'sample' at %.17g; end the "
-                    "step there, enter Event Mode and tick the clock", t, t + h, next);
+                    "step there, enter Event Mode and tick the clock", t, t + h, tick_time(inst, (double)at->k + 1.0));
     return fmi3OK;
 }
 
+void fmi3_clock_after_step(Fmi2Instance *inst, double t, double h) {
+    if (!layer_of(inst)->clocked || !(h > 0.0)) return;
+    const GridStep step = grid_step(&inst->clock_position, fmi3_clock_interval, t, h);
+    grid_take(&inst->clock_position, &step);
+}
+
 fmi3Status fmi3_clock_before_step_mode(Fmi2Instance *inst) {
-    if (!layer_of(inst)->clocked || inst->clock_ticks >= ticks_until(inst, inst->time)) return fmi3OK;
+    if (!layer_of(inst)->clocked || inst->clock_ticks >= (double)inst->clock_position.k + 1.0) return fmi3OK;
     return FAIL("fmi3EnterStepMode: t = %.17g is a tick of the clock 'sample', which was not set (fmi3SetClock) in "
                 "this Event Mode", inst->time);
 }
@@ -87,14 +82,15 @@ fmi3Status fmi3SetClock(fmi3Instance instance, const fmi3ValueReference vr[], si
         if (!layer_of(inst)->clocked || vr[i] != clock_reference(inst))
             return FAIL("fmi3SetClock: value reference %u is no clock of this FMU", (unsigned)vr[i]);
         if (!values[i]) continue;
-        const double k = ticks_until(inst, inst->time) - 1.0;
-        if (!on_tick(inst, inst->time, k))
-            return FAIL("fmi3SetClock: the clock 'sample' ticks at t0 + k Ts (Ts = %g), not at t = %.17g",
-                        fmi3_clock_interval, inst->time);
-        if (inst->clock_ticks < k)
-            return FAIL("fmi3SetClock: the ticks before t = %.17g were not taken (%.0f of %.0f)", inst->time,
-                        inst->clock_ticks, k);
-        inst->clock_ticks = k + 1.0;
+        const GridPosition *at = &inst->clock_position;
+        if (at->since != 0.0)
+            return FAIL("fmi3SetClock: the clock 'sample' ticks at t0 + k Ts (Ts = %g), not at t = %.17g: the steps "
+                        "since t0 = %.17g add up to %.17g s after the tick at %.17g", fmi3_clock_interval, inst->time,
+                        inst->start_time, at->since, tick_time(inst, (double)at->k));
+        if (inst->clock_ticks < (double)at->k)
+            return FAIL("fmi3SetClock: the ticks before t = %.17g were not taken (%.0f of %lld)", inst->time,
+                        inst->clock_ticks, at->k);
+        inst->clock_ticks = (double)at->k + 1.0;
     }
     return fmi3OK;
 }

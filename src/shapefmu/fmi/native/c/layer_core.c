@@ -131,12 +131,14 @@ fmi2Status core_set_debug_logging(Fmi2Instance *inst, int logging_on, size_t n_c
 fmi2Status core_exit_initialization(Fmi2Instance *inst) {
     if (model_exit_initialization(inst) != fmi2OK) return fmi2Error;
     inst->clock_ticks = 0.0;
+    memset(&inst->clock_position, 0, sizeof inst->clock_position);
     inst->mode = inst->model_exchange ? FMI2_EVENT_MODE : FMI2_STEP_COMPLETE;
     return fmi2OK;
 }
 
 void core_reset(Fmi2Instance *inst) {
     inst->time = inst->start_time = inst->clock_ticks = 0.0;
+    memset(&inst->clock_position, 0, sizeof inst->clock_position);
     model_reset(inst);
     inst->mode = FMI2_INSTANTIATED;
 }

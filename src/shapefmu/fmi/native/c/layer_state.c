@@ -21,6 +21,7 @@ typedef struct {
     unsigned long long magic, identity;
     Fmi2Mode mode;
     double time, start_time, clock_ticks;
+    GridPosition clock_position;
     double *reals;
     int *integers, *booleans;
     char *strings;
@@ -51,8 +52,10 @@ static int ours(const Fmi2Instance *inst, const void *state) {
 static fmi2Status check_values(Fmi2Instance *inst, const Snapshot *s, const char *function) {
     const Fmi2ModelInfo *info = &inst->info;
     const char *name;
+    /* the clock's ticks are at most those its position has reached; its period is checked by the FMI 3.0 layer */
     if (!isfinite(s->time) || !isfinite(s->start_time) || !(s->clock_ticks >= 0.0 && s->clock_ticks <= 9e15)
-        || s->clock_ticks != floor(s->clock_ticks))
+        || s->clock_ticks != floor(s->clock_ticks) || !grid_valid(&s->clock_position, INFINITY)
+        || s->clock_ticks > (double)s->clock_position.k + 1.0)
         return fmi2_fail(inst, "%s: the state's time or clock tick count is not valid", function);
     for (size_t vr = 0; vr < info->n_real; vr++)
         if (model_variable(inst, FMI2_REAL, vr, &name) != FMI2_NO_VARIABLE
@@ -127,6 +130,7 @@ fmi2Status core_get_state(Fmi2Instance *inst, void **FMUstate, const char *funct
     s->time = inst->time;
     s->start_time = inst->start_time;
     s->clock_ticks = inst->clock_ticks;
+    s->clock_position = inst->clock_position;
     copy_values(inst, s->reals, s->integers, s->booleans, s->strings, inst->reals, inst->integers, inst->booleans,
                 inst->strings);
     model_save_state(inst, s->model);
@@ -145,6 +149,7 @@ fmi2Status core_set_state(Fmi2Instance *inst, const void *FMUstate, const char *
     inst->time = s->time;
     inst->start_time = s->start_time;
     inst->clock_ticks = s->clock_ticks;
+    inst->clock_position = s->clock_position;
     inst->mode = s->mode;
     if (model_restore_state(inst, s->model, s->model_size) != 0)
         return fmi2_fail(inst, "%s: the state does not fit this instance's model data", function);
@@ -162,12 +167,13 @@ fmi2Status core_free_state(Fmi2Instance *inst, void **FMUstate, const char *func
 }
 
 /* Serialised layout: a header of 8 uint64 (magic, identity, the four counts, mode, model bytes), the
- * time, the start time and the clock ticks, then the Real, Integer, Boolean and String values and the model bytes. */
+ * time, the start time and the clock ticks, the clock's position, then the Real, Integer, Boolean and
+ * String values and the model bytes. */
 enum { HEADER_WORDS = 8 };
 
 static size_t serial_size(const Fmi2Instance *inst, size_t model_size) {
     const Fmi2ModelInfo *info = &inst->info;
-    return HEADER_WORDS * sizeof(unsigned long long) + (3 + info->n_real) * sizeof(double)
+    return HEADER_WORDS * sizeof(unsigned long long) + (3 + info->n_real) * sizeof(double) + sizeof(GridPosition)
            + (info->n_integer + info->n_boolean) * sizeof(int) + string_bytes(inst) + model_size;
 }
 
@@ -204,6 +210,7 @@ fmi2Status core_serialize(Fmi2Instance *inst, const void *FMUstate, unsigned cha
     const double times[3] = {s->time, s->start_time, s->clock_ticks};
     unsigned char *p = put((unsigned char *)serializedState, header, sizeof header);
     p = put(p, times, sizeof times);
+    p = put(p, &s->clock_position, sizeof s->clock_position);
     p = put(p, s->reals, info->n_real * sizeof(double));
     p = put(p, s->integers, info->n_integer * sizeof(int));
     p = put(p, s->booleans, info->n_boolean * sizeof(int));
@@ -240,6 +247,7 @@ fmi2Status core_deserialize(Fmi2Instance *inst, const unsigned char serializedSt
     s->time = times[0];
     s->start_time = times[1];
     s->clock_ticks = times[2];
+    p = take(&s->clock_position, p, sizeof s->clock_position);
     p = take(s->reals, p, info->n_real * sizeof(double));
     p = take(s->integers, p, info->n_integer * sizeof(int));
     p = take(s->booleans, p, info->n_boolean * sizeof(int));

@@ -8,8 +8,9 @@
  * closed-form kind (zv, zvd, zvdd, zv_dn, mzv), from shaper, n, n_modes, omega[i] and zeta[i]
  * (shaper_designs.c), as the pythonfmu FMU does; t_start may change before initialisation. The move starts at
  * t_start, or earlier at the first communication point where the input start is >= 0.5 (a rising
- * start latches); the outputs at a communication point t are the move's exact state at t minus its
- * start. Setting start high after initialisation starts the move at that instant, where the
+ * start latches); the outputs at a communication point are the move's exact state at the time since
+ * its start, counted from the steps the host took (sample_clock.h's StepTime: a start time of 1.7e9
+ * plays the move of 0, bit for bit). Setting start high after initialisation starts the move at that instant, where the
  * acceleration jumps to its first level: the acceleration depends on start (ModelStructure).
  */
 #include <math.h>
@@ -17,6 +18,7 @@
 #include <string.h>
 
 #include "motion_model.h"
+#include "sample_clock.h"
 #include "shaper_designs.h"
 
 /* Impulses of a shaper re-designed in C (the product over the modes of each mode's). */
@@ -24,7 +26,8 @@
 
 typedef struct {
     long long started, has_start;  /* initialised; the move has started, at started_at */
-    double started_at;
+    double started_at;             /* a time since t0, as elapsed */
+    StepTime elapsed;              /* the time since t0, summed from the steps */
     MotionPath path;               /* the move played: the build's, or re-designed in storage */
     double *storage;
     size_t vr[MOTION_MEANINGS];
@@ -59,21 +62,27 @@ static void state_at(const MotionPath *path, double t, double *out) {
     out[0] = path->position[k] + v * s + 0.5 * a * s * s, out[1] = v + a * s, out[2] = a;
 }
 
-static void update(Fmi2Instance *inst, double t) {
+static void update(Fmi2Instance *inst, double elapsed) {
     const Generator *g = generator_of(inst);
     double out[3] = {0.0, 0.0, 0.0};
-    if (g->has_start) state_at(&g->path, t - g->started_at, out);
+    if (g->has_start) state_at(&g->path, elapsed - g->started_at, out);
     inst->reals[g->vr[MOTION_POSITION]] = out[0];
     inst->reals[g->vr[MOTION_VELOCITY]] = out[1];
     inst->reals[g->vr[MOTION_ACCELERATION]] = out[2];
 }
 
-static void maybe_start(Fmi2Instance *inst, double t) {
+/* Whether the move's t_start (an absolute time; negative: none) has come elapsed after t0. */
+static int scheduled(const Fmi2Instance *inst, double elapsed) {
+    const double t_start = inst->reals[generator_of(inst)->vr[MOTION_T_START]];
+    return 0.0 <= t_start && t_start - inst->start_time <= elapsed;
+}
+
+static void maybe_start(Fmi2Instance *inst, double elapsed) {
     Generator *g = generator_of(inst);
     if (g->has_start) return;
-    const double t_start = inst->reals[g->vr[MOTION_T_START]];
-    if (inst->reals[g->vr[MOTION_START]] >= 0.5) g->has_start = 1, g->started_at = t;
-    else if (0.0 <= t_start && t_start <= t) g->has_start = 1, g->started_at = t_start;
+    if (inst->reals[g->vr[MOTION_START]] >= 0.5) g->has_start = 1, g->started_at = elapsed;
+    else if (scheduled(inst, elapsed))
+        g->has_start = 1, g->started_at = inst->reals[g->vr[MOTION_T_START]] - inst->start_time;
 }
 
 /* ---------------------------------------------------------------- life cycle */
@@ -101,6 +110,7 @@ void model_reset(Fmi2Instance *inst) {
     Generator *g = generator_of(inst);
     g->started = g->has_start = 0;
     g->started_at = 0.0;
+    memset(&g->elapsed, 0, sizeof g->elapsed);
 }
 
 int model_instantiate(Fmi2Instance *inst) {
@@ -172,8 +182,9 @@ fmi2Status model_exit_initialization(Fmi2Instance *inst) {
     Generator *g = generator_of(inst);
     if (motion_shaper.bang_bang && design(inst, "fmi2ExitInitializationMode") != fmi2OK) return fmi2Error;
     g->has_start = 0;
-    maybe_start(inst, inst->time);
-    update(inst, inst->time);
+    memset(&g->elapsed, 0, sizeof g->elapsed);
+    maybe_start(inst, 0.0);
+    update(inst, 0.0);
     g->started = 1;
     return fmi2OK;
 }
@@ -185,12 +196,13 @@ fmi2Status model_update(Fmi2Instance *inst, const char *function) {
 
 fmi2Status model_do_step(Fmi2Instance *inst, double t, double h) {
     Generator *g = generator_of(inst);
-    maybe_start(inst, t);
-    if (!g->has_start) {
-        const double t_start = inst->reals[g->vr[MOTION_T_START]];
-        if (0.0 <= t_start && t_start <= t + h) g->has_start = 1, g->started_at = t_start;
-    }
-    update(inst, t + h);
+    (void)t;
+    maybe_start(inst, step_time_value(&g->elapsed));
+    step_time_add(&g->elapsed, h);
+    const double elapsed = step_time_value(&g->elapsed);
+    if (!g->has_start && scheduled(inst, elapsed))
+        g->has_start = 1, g->started_at = inst->reals[g->vr[MOTION_T_START]] - inst->start_time;
+    update(inst, elapsed);
     return fmi2OK;
 }
 
@@ -255,8 +267,8 @@ void model_changed(Fmi2Instance *inst, size_t vr) {
     Generator *g = generator_of(inst);
     if (motion_variables.variables[vr].meaning != MOTION_START || !g->started || g->has_start) return;
     if (inst->reals[vr] >= 0.5) {
-        g->has_start = 1, g->started_at = inst->time;
-        update(inst, inst->time);
+        g->has_start = 1, g->started_at = step_time_value(&g->elapsed);
+        update(inst, g->started_at);
     }
 }
 
@@ -275,6 +287,7 @@ fmi2Status model_partial_derivative(Fmi2Instance *inst, size_t unknown, size_t k
 typedef struct {
     long long magic, started, has_start;
     double started_at;
+    StepTime elapsed;
 } StateBytes;
 
 size_t model_state_size(const Fmi2Instance *inst) {
@@ -284,7 +297,7 @@ size_t model_state_size(const Fmi2Instance *inst) {
 
 void model_save_state(const Fmi2Instance *inst, unsigned char *bytes) {
     const Generator *g = generator_of(inst);
-    const StateBytes saved = {(long long)STATE_MAGIC, g->started, g->has_start, g->started_at};
+    const StateBytes saved = {(long long)STATE_MAGIC, g->started, g->has_start, g->started_at, g->elapsed};
     memcpy(bytes, &saved, sizeof saved);
 }
 
@@ -294,9 +307,11 @@ int model_restore_state(Fmi2Instance *inst, const unsigned char *bytes, size_t s
     if (size != sizeof saved) return -1;
     memcpy(&saved, bytes, sizeof saved);
     if (saved.magic != (long long)STATE_MAGIC || (saved.started != 0 && saved.started != 1)
-        || (saved.has_start != 0 && saved.has_start != 1) || !isfinite(saved.started_at))
+        || (saved.has_start != 0 && saved.has_start != 1) || !isfinite(saved.started_at)
+        || !(saved.elapsed.sum >= 0.0 && saved.elapsed.sum < INFINITY) || !isfinite(saved.elapsed.compensation))
         return -1;
     g->started = saved.started, g->has_start = saved.has_start, g->started_at = saved.started_at;
+    g->elapsed = saved.elapsed;
     /* a re-designed move follows from the parameters the layer has just restored */
     if (saved.started && motion_shaper.bang_bang && design(inst, "fmi2SetFMUstate") != fmi2OK) return -1;
     return 0;

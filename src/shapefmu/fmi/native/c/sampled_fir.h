@@ -11,7 +11,7 @@
 
 #include <stddef.h>
 
-#include "sample_clock.h" /* SAMPLE_TOLERANCE, MAX_SAMPLES_PER_STEP */
+#include "sample_clock.h" /* GridPosition, MAX_SAMPLES_PER_STEP */
 /* The delay line holds at most this many samples (the longest delay of a design, in samples). */
 #define MAX_DELAY_SAMPLES 10000000L
 
@@ -28,32 +28,30 @@ typedef struct {
     long pos;
     double *line;
     double r;
-    /* the sample clock: k the current sample, latched when its input is fixed (v) */
-    double t0, ts, delta;
-    long long k;
+    /* the sample clock (sample_clock.h): where the filter stands on its grid, latched when the
+     * current sample's input is fixed (v) */
+    double ts;
+    GridPosition at;
     int latched;
     double v;
-    double s_k, s_next, s_after;   /* t0 + (k, k + 1, k + 2) Ts, kept with k */
 } SampledFir;
 
 /* Bytes of the FIR's state (clock, history part, delay line) and their copy / restore. */
 size_t fir_state_size(const SampledFir *fir);
 void fir_save(const SampledFir *fir, unsigned char *bytes);
-/* 0, or -1 if the bytes do not fit this FIR's delay line. */
-int fir_restore(SampledFir *fir, const unsigned char *bytes, size_t size);
+/* 0, or -1 if the bytes are no state of this FIR: another delay line, or a value a running filter
+ * cannot hold (a non-finite input, history or position on the grid of its period ts). */
+int fir_restore(SampledFir *fir, const unsigned char *bytes, size_t size, double ts);
 
-/* At rest on u0 before the first sample, at sample 0 of the grid t0 + k ts, not latched. */
-void fir_start(SampledFir *fir, double u0, double t0, double ts);
+/* At rest on u0 before the first sample, at sample 0 of the grid of period ts, not latched. */
+void fir_start(SampledFir *fir, double u0, double ts);
 /* r from the delay line with the current taps (after the taps changed). */
 void fir_recompute(SampledFir *fir);
 /* y at the current communication point for input u. */
 static inline double fir_output(const SampledFir *fir, double u) {
     return fir->w0 * (fir->latched ? fir->v : u) + fir->r;
 }
-/* The samples a step from t to t + h reaches, K(t + h) - k, as a double (a step may span many). */
-double fir_samples_in_step(const SampledFir *fir, double t, double h);
-/* Advance to end = t + h with input u held over the step (the spec's steps 2-4); the step must
- * reach a sample index that fits a long long (fir_samples_in_step checks the count first). */
-void fir_step(SampledFir *fir, double end, double u);
+/* Take step (grid_step of the FIR's position, its count bounded by the caller) with input u held over it. */
+void fir_step(SampledFir *fir, const GridStep *step, double u);
 
 #endif

@@ -159,7 +159,7 @@ fmi2Status model_exit_initialization(Fmi2Instance *inst) {
     if (allocate_line(inst, longest < 1.0 ? 1 : (long)longest) != 0)
         return fmi2_fail(inst, "%s: out of memory for a delay line of %.0f samples", function, longest);
     regrid(inst);
-    fir_start(&s->fir, inst->reals[s->rest], inst->start_time, ts);
+    fir_start(&s->fir, inst->reals[s->rest], ts);
     s->started = 1;
     return model_update(inst, function);
 }
@@ -173,14 +173,11 @@ fmi2Status model_update(Fmi2Instance *inst, const char *function) {
 
 fmi2Status model_do_step(Fmi2Instance *inst, double t, double h) {
     Sampled *s = sampled_of(inst);
-    const double end = t + h;
-    if (end > s->fir.s_after) { /* more than one sample: count them first */
-        const double samples = fir_samples_in_step(&s->fir, t, h);
-        if (samples > (double)MAX_SAMPLES_PER_STEP)
-            return fmi2_fail(inst, "fmi2DoStep: communication step h = %g s spans %.0f samples of Ts = %g s; at most "
-                             "%lld per step", h, samples, s->fir.ts, MAX_SAMPLES_PER_STEP);
-    }
-    fir_step(&s->fir, end, inst->reals[s->u]);
+    const GridStep step = grid_step(&s->fir.at, s->fir.ts, t, h);
+    if (step.count > (double)MAX_SAMPLES_PER_STEP)
+        return fmi2_fail(inst, "fmi2DoStep: communication step h = %g s spans %.0f samples of Ts = %g s; at most "
+                         "%lld per step", h, step.count, s->fir.ts, MAX_SAMPLES_PER_STEP);
+    fir_step(&s->fir, &step, inst->reals[s->u]);
     return fmi2OK;
 }
 
@@ -326,13 +323,13 @@ int model_restore_state(Fmi2Instance *inst, const unsigned char *bytes, size_t s
     s->started = 0;
     s->design_changed = (int)flags[1];
     if (!flags[0]) return size == sizeof flags ? 0 : -1;
-    /* The delay line's length is the second scalar of the FIR's state (sampled_fir.c). */
+    /* The delay line's length is the first scalar of the FIR's state (sampled_fir.c). */
     long long length;
-    if (size < sizeof flags + 2 * sizeof(long long)) return -1;
-    memcpy(&length, bytes + sizeof flags + sizeof(long long), sizeof length);
+    if (size < sizeof flags + sizeof(long long)) return -1;
+    memcpy(&length, bytes + sizeof flags, sizeof length);
     if (length < 1 || length > MAX_DELAY_SAMPLES || (length != s->fir.length && allocate_line(inst, (long)length) != 0))
         return -1;
-    if (fir_restore(&s->fir, bytes + sizeof flags, size - sizeof flags) != 0 || longest_delay(inst) > (double)length)
+    if (fir_restore(&s->fir, bytes + sizeof flags, size - sizeof flags, period(inst)) != 0 || longest_delay(inst) > (double)length)
         return -1;
     regrid(inst);
     s->started = 1;

@@ -170,7 +170,7 @@ fmi2Status model_exit_initialization(Fmi2Instance *inst) {
     }
     if (design(inst, function) != fmi2OK) return fmi2Error;
     c->state.settling = 0.0, c->state.integral = 0.0;
-    clock_start(&c->clock, inst->start_time, ts);
+    clock_start(&c->clock, ts);
     c->started = 1;
     preview(inst);
     return fmi2OK;
@@ -185,12 +185,12 @@ fmi2Status model_update(Fmi2Instance *inst, const char *function) {
 
 fmi2Status model_do_step(Fmi2Instance *inst, double t, double h) {
     Controller *c = controller_of(inst);
-    const double reached = clock_reached(&c->clock, t + h), samples = reached - (double)c->clock.k;
-    if (samples > (double)MAX_SAMPLES_PER_STEP)
+    const GridStep step = grid_step(&c->clock.at, c->clock.ts, t, h);
+    if (step.count > (double)MAX_SAMPLES_PER_STEP)
         return fmi2_fail(inst, "fmi2DoStep: communication step h = %g s spans %.0f samples of Ts = %g s; at most %lld "
-                         "per step", h, samples, c->clock.ts, MAX_SAMPLES_PER_STEP);
+                         "per step", h, step.count, c->clock.ts, MAX_SAMPLES_PER_STEP);
     const double inputs[3] = {real_of(inst, STOS_TARGET), real_of(inst, STOS_POSITION), real_of(inst, STOS_VELOCITY)};
-    clock_step_to(&c->clock, t + h, reached, inputs, 3, commit, c);
+    clock_take(&c->clock, &step, inputs, 3, commit, c);
     preview(inst);
     return fmi2OK;
 }
@@ -289,7 +289,7 @@ int model_restore_state(Fmi2Instance *inst, const unsigned char *bytes, size_t s
     if (saved.magic != (long long)STATE_MAGIC || (saved.started | saved.dirty | saved.settle_on) > 1
         || saved.started < 0 || saved.dirty < 0 || saved.settle_on < 0
         || (saved.state.settling != 0.0 && saved.state.settling != 1.0) || !isfinite(saved.state.integral)
-        || (saved.started && !(saved.clock.ts > 0.0)))
+        || (saved.started && !clock_valid(&saved.clock, 3)))
         return -1;
     c->started = saved.started, c->dirty = saved.dirty, c->settle_on = saved.settle_on;
     c->settle = saved.settle, c->state = saved.state, c->clock = saved.clock;

@@ -57,10 +57,47 @@ static double integral(double t) {
     return table_model.integral[j] + s * right[j] + 0.5 * slope * s * s;
 }
 
+/* As SignalTable.average: one segment's own mean, else the part inside the table by its integral and
+ * the parts before and after it by their share of the step (finite for any finite step). */
 static double average(double t_start, double t_end) {
     const double a = snap(t_start), b = snap(t_end);
     if (b == a) return value(a);
-    return (integral(b) - integral(a)) / (b - a);
+    const long j = segment(a);
+    const size_t n = table_model.n_times;
+    if (j == segment(b)) {
+        if (j < 0) return table_model.before;
+        if ((size_t)j == n - 1 || table_model.hold) return table_model.right[j];
+        return 0.5 * (value(a) + value(b));
+    }
+    const double first = fmax(a, table_model.times[0]), last = fmin(b, table_model.times[n - 1]), width = b - a;
+    return (integral(last) - integral(first)) / width + (first - a) / width * table_model.before
+           + (b - last) / width * table_model.right[n - 1];
+}
+
+/* ---------------------------------------------------------------- the table's text, in pieces */
+
+static size_t text_length(void) {
+    size_t length = 0;
+    for (size_t i = 0; i < table_model.n_text_pieces; i++) length += strlen(table_model.table_text[i]);
+    return length;
+}
+
+static void copy_text(char *to) {
+    for (size_t i = 0; i < table_model.n_text_pieces; i++) {
+        const size_t length = strlen(table_model.table_text[i]);
+        memcpy(to, table_model.table_text[i], length);
+        to += length;
+    }
+    *to = '\0';
+}
+
+static int is_text(const char *text) {
+    for (size_t i = 0; i < table_model.n_text_pieces; i++) {
+        const size_t length = strlen(table_model.table_text[i]);
+        if (strncmp(text, table_model.table_text[i], length) != 0) return 0;
+        text += length;
+    }
+    return *text == '\0';
 }
 
 /* ---------------------------------------------------------------- FMI hooks */
@@ -70,7 +107,7 @@ void model_describe(Fmi2ModelInfo *info) {
     info->guid = table_model.guid;
     info->n_real = 2;
     info->n_string = 1;
-    const size_t length = strlen(table_model.table_text);
+    const size_t length = text_length();
     info->string_capacity = length > FMI2_STRING_CAPACITY ? length : FMI2_STRING_CAPACITY;
 }
 
@@ -84,7 +121,7 @@ Fmi2Role model_variable(const Fmi2Instance *inst, Fmi2Type type, size_t vr, cons
 
 void model_reset(Fmi2Instance *inst) {
     inst->reals[VR_Y] = inst->reals[VR_Y_MEAN] = 0.0;
-    strcpy(fmi2_string(inst, VR_TABLE), table_model.table_text);
+    copy_text(fmi2_string(inst, VR_TABLE));
 }
 
 int model_instantiate(Fmi2Instance *inst) {
@@ -105,6 +142,8 @@ fmi2Status model_update(Fmi2Instance *inst, const char *function) {
 }
 
 fmi2Status model_do_step(Fmi2Instance *inst, double t, double h) {
+    if (!isfinite(t + h))
+        return fmi2_fail(inst, "fmi2DoStep: t + h = %g + %g overflows; the step's end must be a finite time", t, h);
     inst->reals[VR_Y] = value(t + h);
     inst->reals[VR_Y_MEAN] = average(t, t + h);
     return fmi2OK;
@@ -123,7 +162,7 @@ fmi2Status model_check_integer(Fmi2Instance *inst, size_t vr, int value_, const 
 
 fmi2Status model_check_string(Fmi2Instance *inst, size_t vr, const char *text, const char *function) {
     (void)vr;
-    if (strcmp(text, table_model.table_text) == 0) return fmi2OK;
+    if (is_text(text)) return fmi2OK;
     return fmi2_fail(inst, "%s: table is the signal table this native FMU was built with (parsed at build time); got "
                      "another one of %zu characters (rebuild it with shapefmu build reference TABLE --native for it)",
                      function, strlen(text));

@@ -9,7 +9,11 @@
 
 typedef struct {
     const char *guid;
-    const char *table_text;       /* the table parameter's start value, the JSON text of the build */
+    /* the table parameter's start value, the JSON text of the build, in pieces of at most
+     * 4000 bytes (shapefmu.fmi.native.reference.TEXT_PIECE): a string literal each, which every C compiler takes, and which gcc reads
+     * at megabytes a second (a list of byte values took it minutes for a 15 MB table) */
+    const char *const *table_text;
+    size_t n_text_pieces;
     size_t n_times;
     const double *times, *left, *right, *integral;  /* n_times each */
     int hold;                     /* 1: zero-order hold, 0: linear */

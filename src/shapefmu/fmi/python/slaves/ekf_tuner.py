@@ -68,7 +68,7 @@ class EKFTuner(Fmi2Slave):
             values["retune_fraction"],
             amplitude=values["amplitude"],
         )
-        self.clock = SampleClock(ts, self.time, samples_per_python_step(EKF_SAMPLE_SECONDS))
+        self.clock = SampleClock(ts, samples_per_python_step(EKF_SAMPLE_SECONDS))
         values["y"] = 0.0
         self._estimates()
 

@@ -17,8 +17,10 @@ Parameter ``profile`` selects the family, designed at the exit of initialisation
 Start. The move starts at ``t_start`` (s), or earlier at the first communication point where the
 input ``start`` is >= 0.5 (a rising start latches); a negative ``t_start`` waits for the input.
 
-Outputs at a communication point t are the exact values of the move at t - t0
-(``runtime.motion.PiecewiseAcceleration.state``): position and velocity are continuous, the
+Outputs at a communication point are the exact values of the move at the time since its start,
+counted from the steps the host took (``runtime.sample_clock.StepTime``, so that a start time of
+1.7e9 plays the same move as 0; ``runtime.motion.PiecewiseAcceleration.state``): position and
+velocity are continuous, the
 acceleration is right-continuous. Setting ``start`` high starts the move at that instant, where the
 acceleration jumps from 0 to its first level: ModelStructure declares that acceleration depends on
 ``start``; position and velocity start at 0 and do not.
@@ -27,6 +29,7 @@ acceleration jumps from 0 to its first level: ModelStructure declares that accel
 from ....runtime import shaped_bang_bang, shaper_designs, time_frequency, twin_pulse
 from ....runtime.checks import check_finite, check_positive
 from ....runtime.motion import PiecewiseAcceleration
+from ....runtime.sample_clock import StepTime
 from ..slave_base import Fmi2Slave
 
 PROFILES = (*twin_pulse.KINDS, "time-frequency", "bang-bang")
@@ -70,8 +73,9 @@ def design_motion(values):
 class ProfileGenerator(Fmi2Slave):
     model_name = "ProfileGenerator"
     description = "Rest-to-rest motion profiles: twin-pulse family, time-frequency, shaped bang-bang"
-    kernels = (PiecewiseAcceleration,)
-    state_attributes = ("motion", "started_at")
+    kernels = (PiecewiseAcceleration, StepTime)
+    # started_at and the time the outputs are read at are times since t0, the start time
+    state_attributes = ("motion", "started_at", "t0", "elapsed")
 
     def declare(self):
         self.parameter("profile", "BC:TZ", f"profile family: {', '.join(PROFILES)}")
@@ -99,28 +103,34 @@ class ProfileGenerator(Fmi2Slave):
         self.output("acceleration", "acceleration of the move (right-continuous)", unit="m/s2")
         self.motion = None
         self.started_at = None
+        self.t0 = 0.0
+        self.elapsed = None
 
     def initialize(self):
         if self.values["shaper"] not in SHAPERS:
             raise ValueError(f"shaper must be one of {', '.join(SHAPERS)}, got {self.values['shaper']!r}")
         check_finite(self.values["t_start"], "t_start")
         self.motion = design_motion(self.values)
-        self.started_at = None
-        self._maybe_start(self.time)
-        self._update(self.time)
+        self.t0, self.elapsed, self.started_at = self.time, StepTime(), None
+        self._maybe_start(0.0)
+        self._update(0.0)
 
-    def _maybe_start(self, t):
+    def _scheduled(self, elapsed):
+        """Whether the move's t_start (an absolute time; negative: none) has come ``elapsed`` after t0."""
+        t_start = self.values["t_start"]
+        return 0.0 <= t_start and t_start - self.t0 <= elapsed
+
+    def _maybe_start(self, elapsed):
         if self.started_at is not None:
             return
-        t_start = self.values["t_start"]
         if self.values["start"] >= 0.5:
-            self.started_at = t
-        elif 0.0 <= t_start <= t:
-            self.started_at = t_start
+            self.started_at = elapsed
+        elif self._scheduled(elapsed):
+            self.started_at = self.values["t_start"] - self.t0
 
-    def _update(self, t):
+    def _update(self, elapsed):
         position, velocity, acceleration = (
-            (0.0, 0.0, 0.0) if self.started_at is None else self.motion.state(t - self.started_at)
+            (0.0, 0.0, 0.0) if self.started_at is None else self.motion.state(elapsed - self.started_at)
         )
         self.values["position"], self.values["velocity"], self.values["acceleration"] = position, velocity, acceleration
 
@@ -135,13 +145,13 @@ class ProfileGenerator(Fmi2Slave):
 
     def input_changed(self, name):
         if self.phase == "step" and self.started_at is None and self.values["start"] >= 0.5:
-            self.started_at = self.time
-            self._update(self.time)
+            self.started_at = self.elapsed.value()
+            self._update(self.started_at)
 
     def step(self, t, h):
-        self._maybe_start(t)
-        if self.started_at is None:
-            t_start = self.values["t_start"]
-            if 0.0 <= t_start <= t + h:
-                self.started_at = t_start
-        self._update(t + h)
+        self._maybe_start(self.elapsed.value())
+        self.elapsed.add(h)
+        elapsed = self.elapsed.value()
+        if self.started_at is None and self._scheduled(elapsed):
+            self.started_at = self.values["t_start"] - self.t0
+        self._update(elapsed)

@@ -148,7 +148,7 @@ class ShapeFilter(Fmi2Slave):
         self.fir = FeedthroughFIR.from_taps(taps, u0)
         fixed, per_term = FIR_SAMPLE_SECONDS
         terms = sum(1 for w in taps if w != 0.0)
-        self.clock = SampleClock(ts, self.time, samples_per_python_step(fixed + per_term * terms))
+        self.clock = SampleClock(ts, samples_per_python_step(fixed + per_term * terms))
         values["Ts_used"] = ts
         values["y"] = self.fir.output(check_finite(values["u"], "u"))
 

@@ -74,7 +74,7 @@ class Shaper(Fmi2Slave):
         self.design = (tuple(times), tuple(amplitudes))
         self.fir = FeedthroughFIR(delays, weights, u0)
         fixed, per_term = FIR_SAMPLE_SECONDS
-        self.clock = SampleClock(ts, self.time, samples_per_python_step(fixed + per_term * len(delays)))
+        self.clock = SampleClock(ts, samples_per_python_step(fixed + per_term * len(delays)))
         values["y"] = self.fir.output(check_finite(values["u"], "u"))
 
     def _warn_above_nyquist(self, modes, ts):

@@ -80,7 +80,7 @@ class STOSController(Fmi2Slave):
             settle["Ts"] = ts
         self.kernel = STOSKernel(curves, settle)
         fixed, per_impulse = STOS_SAMPLE_SECONDS
-        self.clock = SampleClock(ts, self.time, samples_per_python_step(fixed + per_impulse * len(times)))
+        self.clock = SampleClock(ts, samples_per_python_step(fixed + per_impulse * len(times)))
         self._preview(self._inputs())
 
     def _inputs(self):
