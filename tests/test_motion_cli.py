@@ -8,9 +8,9 @@ import json
 
 import pytest
 
-from motion_cases import ruckig_trajectory
 from shapefmu.cli import main
 from shapefmu.runtime.jerk_profiles import Limits
+from support.motion_cases import ruckig_trajectory
 
 EXAMPLE = ["motion", "plan", "--axis", "x:0:0.01:0.3:5:2000", "--mode", "40:0.05", "--vtol", "0.01"]
 

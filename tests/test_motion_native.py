@@ -10,27 +10,28 @@ import random
 
 import pytest
 
-from motion_cases import random_problem, random_targets, ruckig_trajectory
 from shapefmu.fmi.native import jerk_planner as native
 from shapefmu.runtime import jerk_planner, jerk_vibration
 from shapefmu.runtime.jerk_profiles import Limits
-from test_motion_rigid import _assert_within
+from support.motion_cases import (EXAMPLE_LIMITS, assert_ends_in, assert_within, example_plan, random_problem,
+                                  random_targets, ruckig_trajectory)
 
 
 def _same(python, c):
+    """``python``: the kernel's PlannedMove or the design layer's Trajectory (phases as tuples)."""
     assert c.duration == pytest.approx(python.duration, rel=1e-12, abs=0.0)
     assert c.method == python.method
     for p, q in zip(python.phases, c.phases):
-        assert len(p.durations) == len(q.durations)
-        assert q.durations == pytest.approx(p.durations, rel=1e-12, abs=1e-12 * python.duration)
-        assert q.jerks == pytest.approx(p.jerks, rel=1e-12, abs=0.0)
+        durations, jerks = (p[1], p[2]) if isinstance(p, tuple) else (p.durations, p.jerks)
+        assert len(durations) == len(q.durations)
+        assert q.durations == pytest.approx(list(durations), rel=1e-12, abs=1e-12 * python.duration)
+        assert q.jerks == pytest.approx(list(jerks), rel=1e-12, abs=0.0)
 
 
 @pytest.mark.parametrize("delta", [0.0, 0.05])
 def test_the_twin_plans_the_40_hz_example_as_python_does(delta):
     modes = [[jerk_vibration.Mode(2 * math.pi * 40.0, 0.05, delta, 0.01)]]
-    args = ([(0.0, 0.0, 0.0)], [(0.01, 0.0, 0.0)], [Limits(0.3, 5.0, 2000.0)], modes)
-    _same(jerk_planner.plan_move(*args), native.plan(*args))
+    _same(example_plan(delta), native.plan([(0.0, 0.0, 0.0)], [(0.01, 0.0, 0.0)], [EXAMPLE_LIMITS], modes))
 
 
 def test_the_twin_plans_random_moves_with_modes_as_python_does():
@@ -67,22 +68,21 @@ def test_10000_random_starts_and_mid_move_replans_end_in_the_target_within_the_l
         none = [[] for _ in states]
         move = native.plan(states, targets, limits, none)
         if case % 50 == 0:
-            assert move.duration == pytest.approx(ruckig_trajectory(states, targets, limits).duration, rel=1e-9)
+            assert math.isclose(move.duration, ruckig_trajectory(states, targets, limits).duration, rel_tol=1e-9)
         _check(move, targets, limits)
         switch = rng.uniform(0.0, move.duration)
         now = [phases.state(switch)[:3] for phases in move.phases]
         new_targets = random_targets(rng, limits)
         replanned = native.plan(now, new_targets, limits, none)
         for phases, state in zip(replanned.phases, now):
-            assert phases.state(0.0)[:3] == pytest.approx(state, abs=1e-9)
+            assert all(abs(x - y) <= 1e-9 for x, y in zip(phases.state(0.0), state)), (phases.state(0.0), state)
         _check(replanned, new_targets, limits)
 
 
 def _check(move, targets, limits):
     for phases, target, lim in zip(move.phases, targets, limits):
-        assert phases.duration == pytest.approx(move.duration, rel=1e-12)
-        assert phases.end() == pytest.approx(target, rel=1e-9, abs=1e-9)
-        _assert_within(phases, lim)
+        assert_ends_in(phases, target, move.duration)
+        assert_within(phases, lim)
 
 
 def test_random_moves_with_modes_never_break_a_limit_or_a_bound():

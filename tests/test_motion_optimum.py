@@ -10,22 +10,19 @@ import math
 
 import pytest
 
-from motion_cases import ruckig_trajectory
-from shapefmu.motion import AxisLimits, plan
 from shapefmu.optimal import jerk_limited_optimum
-from shapefmu.runtime.jerk_profiles import Limits
-from test_motion_vibration import mode_amplitude
+from support.motion_cases import example_plan, example_ruckig, mode_amplitude
 
 
 @pytest.mark.parametrize("delta", [0.0, 0.05])
 def test_the_planner_is_within_5_percent_of_the_optimum_on_the_40_hz_example(delta):
-    move = plan([0.0], [0.01], [AxisLimits(0.3, 5.0, 2000.0)], [(40.0, 0.05)], band=delta, vtol=0.01)
+    move = example_plan(delta)
     residual, = move.residuals
     bound = 0.01 * residual.rigid_amplitude
     optimum = jerk_limited_optimum([(0.0, 0.0, 0.0)], [0.01], [(0.3, 5.0, 2000.0, -0.3, -5.0)],
                                    [[(2 * math.pi * 40.0, 0.05, delta, bound)]], n_intervals=200)
     axis, = optimum.axes
-    rigid = ruckig_trajectory([(0.0, 0.0, 0.0)], [(0.01, 0.0, 0.0)], [Limits(0.3, 5.0, 2000.0)]).duration
+    rigid = example_ruckig().duration
     assert optimum.certified
     assert optimum.lower < optimum.upper
     assert rigid <= optimum.upper

@@ -3,53 +3,29 @@
 References: the mode's response integrated independently (the five-state system p, v, a, y, y'
 driven by the jerk, stepped phase by phase with scipy's matrix exponential, from the mode at its
 quasi-static deflection), the rigid move and its residual taken from Ruckig's own trajectory, and
-the issue's measured figures for the 40 Hz example (Ruckig 91.98 ms, Ruckig + ZV 104.50 ms).
+the issue's measured figures for the 40 Hz example (Ruckig 91.98 ms, Ruckig + ZV 104.50 ms). The
+random moving starts and the widest band are planned by the C twin (equal to the Python kernel:
+test_motion_native), the rest by the Python kernel.
 """
 
 import math
 import random
 
-import numpy as np
 import pytest
-from scipy.linalg import expm
 
-from motion_cases import random_problem, ruckig_trajectory
+from shapefmu.fmi.native import jerk_planner as native
 from shapefmu.motion import AxisLimits, plan
-from test_motion_rigid import _assert_within
+from shapefmu.runtime import jerk_vibration
 from shapefmu.runtime.jerk_profiles import Limits, Phases
-
-
-def mode_amplitude(start, durations, jerks, hz, zeta, a_final):
-    """Amplitude of y'' + 2 zeta w y' + w^2 y = -a after the phases, by matrix exponentials."""
-    w = 2 * math.pi * hz
-    A = np.zeros((6, 6))  # p, v, a, y, y', jerk (held constant over a phase)
-    A[0, 1] = A[1, 2] = A[3, 4] = 1.0
-    A[2, 5] = 1.0
-    A[4, 3], A[4, 4], A[4, 2] = -w * w, -2 * zeta * w, -1.0
-    x = np.array([start[0], start[1], start[2], -start[2] / w**2, 0.0, 0.0])
-    for d, j in zip(durations, jerks):
-        x[5] = j
-        x = expm(A * d) @ x
-    e, de = x[3] + a_final / w**2, x[4]
-    wd = w * math.sqrt(1 - zeta**2)
-    return math.hypot(e, (de + zeta * w * e) / wd)
-
-
-def ruckig_phases(trajectory, axis):
-    profile = trajectory.profiles[0][axis]
-    return list(profile.t), list(profile.j)
-
-
-def band(hz, delta, count=41):
-    return [hz] if delta == 0 else list(np.linspace(hz * (1 - delta), hz * (1 + delta), count))
+from support.motion_cases import (EXAMPLE_LIMITS, assert_ends_in, assert_within, band, example_plan, example_ruckig,
+                                  mode_amplitude, random_problem, ruckig_phases, ruckig_trajectory)
 
 
 def test_the_40_hz_example_beats_ruckig_followed_by_zv():
     # Issue 36: 10 mm, v 0.3 m/s, a 5 m/s^2, j 2000 m/s^3, a 40 Hz mode with zeta 0.05, 1 %.
-    lim = Limits(0.3, 5.0, 2000.0)
-    peer = ruckig_trajectory([(0.0, 0.0, 0.0)], [(0.01, 0.0, 0.0)], [lim])
+    peer = example_ruckig()
     assert peer.duration == pytest.approx(0.09198, abs=5e-6)  # the issue's 91.98 ms
-    move = plan([0.0], [0.01], [AxisLimits(0.3, 5.0, 2000.0)], [(40.0, 0.05)], vtol=0.01)
+    move = example_plan(0.0)
     assert move.rigid_duration == pytest.approx(peer.duration, rel=1e-9)
     assert move.ceiling_shapers == ("zv",)
     assert move.ceiling_duration == pytest.approx(0.1045, abs=5e-5)  # the issue's Ruckig + ZV, 104.50 ms
@@ -60,30 +36,39 @@ def test_the_40_hz_example_beats_ruckig_followed_by_zv():
     assert mode_amplitude(start, durations, jerks, 40.0, 0.05, 0.0) <= 0.01 * reference
 
 
-@pytest.mark.parametrize("delta", [0.05, 0.1])
-def test_a_band_holds_its_bound_at_every_frequency(delta):
-    lim = Limits(0.3, 5.0, 2000.0)
-    peer = ruckig_trajectory([(0.0, 0.0, 0.0)], [(0.01, 0.0, 0.0)], [lim])
-    move = plan([0.0], [0.01], [AxisLimits(0.3, 5.0, 2000.0)], [(40.0, 0.05)], band=delta, vtol=0.01)
-    assert move.duration <= move.ceiling_duration
-    (start, durations, jerks), = move.phases
+def _example_by_the_twin(delta):
+    modes = [[jerk_vibration.Mode(2 * math.pi * 40.0, 0.05, delta, 0.01)]]
+    move = native.plan([(0.0, 0.0, 0.0)], [(0.01, 0.0, 0.0)], [EXAMPLE_LIMITS], modes)
+    (phases,) = move.phases
+    return move.duration, move.ceiling_duration, (phases.state(0.0)[:3], phases.durations, phases.jerks)
+
+
+@pytest.mark.parametrize("delta, planner", [(0.05, "python"), (0.1, "c")])
+def test_a_band_holds_its_bound_at_every_frequency(delta, planner):
+    if planner == "python":
+        move = example_plan(delta)
+        duration, ceiling, (start, durations, jerks) = move.duration, move.ceiling_duration, move.phases[0]
+    else:
+        duration, ceiling, (start, durations, jerks) = _example_by_the_twin(delta)
+    assert duration <= ceiling
+    assert_ends_in(Phases(*start, list(durations), list(jerks)), (0.01, 0.0, 0.0), duration)
     frequencies = band(40.0, delta)
-    reference = max(mode_amplitude((0, 0, 0), *ruckig_phases(peer, 0), hz, 0.05, 0.0) for hz in frequencies)
+    reference = max(mode_amplitude((0, 0, 0), *ruckig_phases(example_ruckig(), 0), hz, 0.05, 0.0)
+                    for hz in frequencies)
     worst = max(mode_amplitude(start, durations, jerks, hz, 0.05, 0.0) for hz in frequencies)
     assert worst <= 0.01 * reference * (1 + 1e-6)
 
 
 def _check_move(move, states, targets, limits, hz, zeta, delta, vtol, peer):
-    for axis, ((start, durations, jerks), target, lim) in enumerate(zip(move.phases, targets, limits)):
-        phases = Phases(*start, list(durations), list(jerks))
-        assert start == pytest.approx(states[axis], abs=1e-12)
-        assert phases.duration == pytest.approx(move.duration, rel=1e-12)
-        assert phases.end() == pytest.approx(target, rel=1e-9, abs=1e-9)
-        _assert_within(phases, lim)
+    for axis, (phases, target, lim) in enumerate(zip(move.phases, targets, limits)):
+        assert phases.state(0.0)[:3] == pytest.approx(states[axis], abs=1e-12)
+        assert_ends_in(phases, target, move.duration)
+        assert_within(phases, lim)
         frequencies = band(hz[axis], delta, 9)
         reference = max(mode_amplitude(states[axis], *ruckig_phases(peer, axis), f, zeta, target[2])
                         for f in frequencies)
-        worst = max(mode_amplitude(start, durations, jerks, f, zeta, target[2]) for f in frequencies)
+        worst = max(mode_amplitude(states[axis], phases.durations, phases.jerks, f, zeta, target[2])
+                    for f in frequencies)
         assert worst <= vtol * reference * (1 + 1e-6) + 1e-15
 
 
@@ -93,8 +78,8 @@ def test_random_moves_from_moving_states_meet_limits_and_bounds():
         states, targets, limits = random_problem(rng, rest_target=True)
         hz = [rng.uniform(2.0, 8.0) for _ in states]
         delta = rng.choice([0.0, 0.05])
-        axis_limits = [AxisLimits(lim.v_max, lim.a_max, lim.j_max, lim.v_min, lim.a_min) for lim in limits]
-        move = plan(states, targets, axis_limits, {f"axis{i}": [(f, 0.05)] for i, f in enumerate(hz)}, band=delta)
+        modes = [[jerk_vibration.Mode(2 * math.pi * f, 0.05, delta, 0.01)] for f in hz]
+        move = native.plan(states, targets, limits, modes)
         peer = ruckig_trajectory(states, targets, limits)
         assert move.rigid_duration == pytest.approx(peer.duration, rel=1e-9)
         assert move.duration <= move.ceiling_duration
@@ -105,8 +90,7 @@ def test_a_replanned_move_cancels_the_ringing_left_by_the_first():
     # Re-planned mid-move to a new target: the second move starts in the first's state at that
     # sample, the limits hold across the switch, and the mode - integrated over both moves from
     # the first start - rings less than 1 % of the rigid re-plan's.
-    lim = AxisLimits(0.3, 5.0, 2000.0)
-    first = plan([0.0], [0.01], [lim], [(40.0, 0.05)])
+    first = example_plan(0.0)
     switch = 0.03
     second = first.replan(switch, [0.025])
     (start, durations, jerks), = second.phases
@@ -117,8 +101,8 @@ def test_a_replanned_move_cancels_the_ringing_left_by_the_first():
         cut.append(min(d, max(switch - elapsed, 0.0)))
         elapsed += d
     both = (cut + list(durations), list(j1) + list(jerks))
-    _assert_within(Phases(0.0, 0.0, 0.0, *both), Limits(0.3, 5.0, 2000.0))
-    rigid_peer = ruckig_trajectory([tuple(start)], [(0.025, 0.0, 0.0)], [Limits(0.3, 5.0, 2000.0)])
+    assert_within(Phases(0.0, 0.0, 0.0, *both), EXAMPLE_LIMITS)
+    rigid_peer = ruckig_trajectory([tuple(start)], [(0.025, 0.0, 0.0)], [EXAMPLE_LIMITS])
     rigid_both = (cut + ruckig_phases(rigid_peer, 0)[0], list(j1) + ruckig_phases(rigid_peer, 0)[1])
     reference = mode_amplitude((0, 0, 0), *rigid_both, 40.0, 0.05, 0.0)
     assert mode_amplitude((0, 0, 0), *both, 40.0, 0.05, 0.0) <= 0.01 * reference
