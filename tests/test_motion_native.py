@@ -2,19 +2,24 @@
 on 10,000 random starts and mid-move re-plans its moves end exactly in the target within the limits.
 
 References: the Python kernel (runtime.jerk_planner) for the twin; Ruckig for the rigid durations;
-the limits and the end state checked on the exact polynomials of every phase.
+the limits and the end state checked on the exact polynomials of every phase. The twin is reentrant
+(two threads plan at once, each in its workspace) and clean under valgrind memcheck.
 """
 
 import math
 import random
+import subprocess
+from concurrent.futures import ThreadPoolExecutor
 
 import pytest
 
 from shapefmu.fmi.native import jerk_planner as native
 from shapefmu.runtime import jerk_planner, jerk_vibration
 from shapefmu.runtime.jerk_profiles import Limits
+from support import HOSTS_C
 from support.motion_cases import (EXAMPLE_LIMITS, assert_ends_in, assert_within, example_plan, random_problem,
                                   random_targets, ruckig_trajectory)
+from support.valgrind import assert_clean_under_memcheck, requires_valgrind
 
 
 def _same(python, c):
@@ -117,3 +122,49 @@ def test_a_start_that_must_break_a_limit_is_refused_with_its_numbers():
     lim = Limits(1.0, 2.0, 4.0)
     with pytest.raises(ValueError, match=r"axis 0: initial velocity 0\.9 with acceleration 2 reaches 1\.4"):
         native.plan([(0.0, 0.9, 2.0)], [(1.0, 0.0, 0.0)], [lim], [[]])
+
+
+def test_two_threads_plan_at_once_each_in_its_own_workspace():
+    # The twin keeps nothing between calls (jerk_planner.h: every buffer in the caller's workspace):
+    # moves planned by two threads at the same time (ctypes releases the GIL in the call) equal the
+    # same moves planned one after the other.
+    rng = random.Random(21)
+    problems = []
+    while len(problems) < 4:
+        states, targets, limits = random_problem(rng, axes=3, rest_target=True)
+        modes = [[jerk_vibration.Mode(2 * math.pi * rng.uniform(2.0, 8.0), 0.05, 0.05, 0.01)] for _ in states]
+        problems.append((states, targets, limits, modes, native.ceiling_shapers(states, targets, limits, modes)))
+
+    def planned(problem):  # in the calling thread's own workspace
+        try:
+            move = native.plan(*problem[:4], shapers=problem[4])
+        except ValueError as error:
+            return str(error)
+        return move.duration, [(p.durations, p.jerks) for p in move.phases]
+
+    alone = [planned(problem) for problem in problems]
+    with ThreadPoolExecutor(max_workers=2) as pool:
+        together = list(pool.map(planned, problems))
+    assert together == alone
+
+
+@pytest.mark.foreign
+@requires_valgrind
+def test_the_twin_touches_no_invalid_memory_and_leaks_nothing(tmp_path):
+    # tests/hosts_c/valgrind_jerk_planner.c with the twin's sources (-g) under memcheck; the moves it
+    # plans against the Python kernel (the 40 Hz example, its band and its re-plan) and Ruckig.
+    program = tmp_path / "valgrind_jerk_planner"
+    subprocess.run(["gcc", "-g", "-O1", "-std=c99", "-Wall", "-Wextra", "-Werror", "-I", str(native.SOURCES[0].parent),
+                    str(HOSTS_C / "valgrind_jerk_planner.c"), *map(str, native.SOURCES), "-o", str(program), "-lm"],
+                   check=True)
+    printed = assert_clean_under_memcheck([program]).stdout.split()
+    assert printed[0] == "ok"
+    example, band, replanned, moving, rigid = map(float, printed[1:])
+    assert example == pytest.approx(example_plan(0.0).duration, rel=1e-12)
+    assert band == pytest.approx(example_plan(0.05).duration, rel=1e-12)
+    assert replanned == pytest.approx(example_plan(0.0).replan(0.03, [0.025]).duration, rel=1e-12)
+    states, targets = [(0.1, 0.4, -0.5), (-0.2, -0.3, 0.2)], [(0.6, 0.0, 0.0), (0.3, 0.0, 0.0)]
+    limits = [Limits(1.0, 2.0, 8.0, -0.8, -1.5), Limits(0.7, 1.0, 3.0, -1.2, -2.5)]
+    assert rigid == pytest.approx(ruckig_trajectory(states, targets, limits).duration, rel=1e-9)
+    modes = [[jerk_vibration.Mode(2 * math.pi * 5.0, 0.05, 0.0, 0.01)], []]
+    assert moving == pytest.approx(native.plan(states, targets, limits, modes, shapers=[[], []]).duration, rel=1e-12)

@@ -2,7 +2,7 @@
 through ctypes: what the tests compare with the Python kernel (``runtime.jerk_planner``) and what the
 benchmark times beside Ruckig. The FMU that will carry it waits for the FMU kinds of issue 33.
 
-``NativePlanner().plan(states, targets, limits, modes, ...)`` takes the runtime kernel's arguments
+``plan(states, targets, limits, modes, ...)`` takes the runtime kernel's arguments
 (``Limits``, ``jerk_vibration.Mode``) and returns a ``runtime.jerk_planner.PlannedMove``; the ceiling's
 shapers, which depend only on the modes, are designed here in Python first
 (``runtime.jerk_planner.catalog_shapers``), as a native FMU designs them at build time.
@@ -14,6 +14,7 @@ import ctypes
 import functools
 import math
 import tempfile
+import threading
 from pathlib import Path
 
 from shapefmu.fmi.compiler import run_compiler
@@ -70,12 +71,42 @@ def library() -> ctypes.CDLL:
     if done.returncode != 0:
         raise RuntimeError(f"compiling the C planner failed: {done.stderr}")
     lib = ctypes.CDLL(str(target))
-    lib.jp_plan.argtypes = [ctypes.POINTER(_Request), ctypes.POINTER(_Result)]
+    lib.jp_workspace_new.argtypes = []
+    lib.jp_workspace_new.restype = ctypes.c_void_p
+    lib.jp_workspace_free.argtypes = [ctypes.c_void_p]
+    lib.jp_workspace_free.restype = None
+    lib.jp_plan.argtypes = [ctypes.POINTER(_Request), ctypes.POINTER(_Result), ctypes.c_void_p]
     lib.jp_plan.restype = ctypes.c_int
     lib.jp_rigid_duration.argtypes = [ctypes.POINTER(_Request), ctypes.POINTER(ctypes.c_double), ctypes.c_char_p,
-                                      ctypes.c_int]
+                                      ctypes.c_int, ctypes.c_void_p]
     lib.jp_rigid_duration.restype = ctypes.c_int
     return lib
+
+
+class _Workspace:
+    """The buffers plans work in (``jp_workspace_new``), freed with the object; every thread plans in
+    its own (``_workspace``), so threads plan at the same time (ctypes releases the GIL)."""
+
+    def __init__(self):
+        self.lib = library()
+        self.pointer = self.lib.jp_workspace_new()
+        if not self.pointer:
+            raise MemoryError("the C planner's workspace could not be allocated")
+
+    def __del__(self):
+        if getattr(self, "pointer", None):
+            self.lib.jp_workspace_free(self.pointer)
+            self.pointer = None
+
+
+_per_thread = threading.local()
+
+
+def _workspace() -> _Workspace:
+    """This thread's workspace."""
+    if not hasattr(_per_thread, "workspace"):
+        _per_thread.workspace = _Workspace()
+    return _per_thread.workspace
 
 
 def _request(states, targets, limits, modes=None, shapers=None, straight=False, ts=None, history=None) -> _Request:
@@ -119,7 +150,8 @@ def rigid_duration(states, targets, limits) -> float:
     """The synchronised rigid duration (Ruckig's) computed by the twin."""
     request = _request(states, targets, limits)
     duration, message = ctypes.c_double(), ctypes.create_string_buffer(256)
-    if library().jp_rigid_duration(ctypes.byref(request), ctypes.byref(duration), message, 256) != 0:
+    if library().jp_rigid_duration(ctypes.byref(request), ctypes.byref(duration), message, 256,
+                                   _workspace().pointer) != 0:
         raise ValueError(message.value.decode())
     return duration.value
 
@@ -132,14 +164,14 @@ def ceiling_shapers(states, targets, limits, modes):
 
 
 def plan(states, targets, limits, modes, straight=False, ts=None, history=None, shapers=None) -> PlannedMove:
-    """``runtime.jerk_planner.plan_move`` in C. ``history``: per axis the ``Phases`` of the jerk
-    since the first start (a re-plan); ``shapers`` the ceiling's candidates (``ceiling_shapers`` by
-    default)."""
+    """``runtime.jerk_planner.plan_move`` in C, in this thread's workspace. ``history``: per axis the
+    ``Phases`` of the jerk since the first start (a re-plan); ``shapers`` the ceiling's candidates
+    (``ceiling_shapers`` by default)."""
     if shapers is None and any(modes):
         shapers = ceiling_shapers(states, targets, limits, modes)
     request = _request(states, targets, limits, modes, shapers, straight, ts, history)
     result = _Result()
-    if library().jp_plan(ctypes.byref(request), ctypes.byref(result)) != 0:
+    if library().jp_plan(ctypes.byref(request), ctypes.byref(result), _workspace().pointer) != 0:
         raise ValueError(result.message.decode())
     phases = []
     for i in range(len(states)):

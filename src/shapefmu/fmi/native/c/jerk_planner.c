@@ -34,7 +34,7 @@ typedef struct {
     const JpRequest *rq;
     double states[JP_MAX_AXES][3];
     Rigid rigid;
-    Ph *scratch;  /* MAX_EXTREMAL */
+    JpWorkspace *ws;
     char *message;
     int size;
 } Planner;
@@ -43,9 +43,9 @@ static int plan_rigid(Planner *pl, double (*targets)[3], const JpLimits *limits,
     Rigid rg;
     int status;
     if (pl->rq->straight)
-        status = jpi_straight_line(&rg, pl->rq->axes, pl->states, targets, limits, T, out, pl->scratch, pl->message, pl->size);
+        status = jpi_straight_line(&rg, pl->rq->axes, pl->states, targets, limits, T, out, pl->ws, pl->message, pl->size);
     else
-        status = jpi_synchronise(&rg, pl->rq->axes, pl->states, targets, limits, T, out, pl->scratch);
+        status = jpi_synchronise(&rg, pl->rq->axes, pl->states, targets, limits, T, out, pl->ws);
     if (status == -1)
         snprintf(pl->message, (size_t)pl->size, "unreachable target: no common duration found in which every axis "
                  "reaches its target within its limits");
@@ -58,7 +58,7 @@ static int shaped_fixed_point(Planner *pl, const JpLimits *planned, const JpShap
     int axes = rq->axes;
     double corrected[JP_MAX_AXES][3];
     memcpy(corrected, rq->targets, sizeof(corrected));
-    static Ph rigid[JP_MAX_AXES];
+    Ph *rigid = pl->ws->fixed_point;
     char ignored[256];
     for (int it = 0; it < 40; it++) {
         double T;
@@ -69,7 +69,7 @@ static int shaped_fixed_point(Planner *pl, const JpLimits *planned, const JpShap
         if (status != 0) return 0;
         double error = 0.0;
         for (int i = 0; i < axes; i++) {
-            if (shapers[i] != NULL) { if (jpi_convolve_jerk(&rigid[i], shapers[i], &shaped[i]) != 0) return 0; }
+            if (shapers[i] != NULL) { if (jpi_convolve_jerk(&rigid[i], shapers[i], &shaped[i], pl->ws) != 0) return 0; }
             else shaped[i] = rigid[i];
             int n = shaped[i].n;
             double p = shaped[i].p[n], v = shaped[i].v[n];
@@ -163,11 +163,11 @@ static int cancelled(Planner *pl, int axis, double T, const Ph *rigid, const dou
     }
     Held pins[8];
     int n_pins = 0;
-    static double d[MAXP], j[MAXP];
+    double *d = pl->ws->cancelled_d, *j = pl->ws->cancelled_j;
     for (int attempt = 0; attempt < 8; attempt++) {
         int n;
         if (!jpi_cancel(pl->states[axis], rq->targets[axis], &rq->limits[axis], T, modes, n_modes, rigid, ringing, omegas, zetas,
-                    freqs, doublets, pins, n_pins, d, j, &n))
+                    freqs, doublets, pins, n_pins, d, j, &n, pl->ws))
             return 0;
         jpi_ph_set(out, pl->states[axis][0], pl->states[axis][1], pl->states[axis][2], d, j, n);
         Held past;
@@ -211,8 +211,8 @@ static int attempt(const Search *s, double T, Ph *out) {
     Planner *pl = s->pl;
     const JpRequest *rq = pl->rq;
     if (rq->straight) return 0;
-    static Ph lasting[JP_MAX_AXES];
-    if (T != s->T0) { if (!jpi_profiles_lasting(&pl->rigid, T, -1, lasting)) return 0; }
+    Ph *lasting = pl->ws->lasting;
+    if (T != s->T0) { if (!jpi_profiles_lasting(&pl->rigid, T, -1, lasting, pl->ws)) return 0; }
     else memcpy(lasting, s->rigid, sizeof(Ph) * (size_t)rq->axes);
     for (int i = 0; i < rq->axes; i++) {
         if (rq->mode_count[i] == 0) { out[i] = lasting[i]; continue; }
@@ -231,8 +231,8 @@ static void copy_out(const Ph *ph, JpAxisPhases *out) {
     memcpy(out->jerks, ph->j, sizeof(double) * (size_t)ph->n);
 }
 
-static int plan(const JpRequest *rq, JpResult *result, Ph *scratch) {
-    Planner pl = {rq, {{0}}, {0}, scratch, result->message, (int)sizeof(result->message)};
+static int plan(const JpRequest *rq, JpResult *result, JpWorkspace *ws) {
+    Planner pl = {rq, {{0}}, {0}, ws, result->message, (int)sizeof(result->message)};
     int axes = rq->axes;
     if (axes < 1 || axes > JP_MAX_AXES) {
         snprintf(result->message, sizeof(result->message), "the number of axes must be in [1, %d], got %d", JP_MAX_AXES, axes);
@@ -254,12 +254,12 @@ static int plan(const JpRequest *rq, JpResult *result, Ph *scratch) {
         }
         ringing = histories;
     }
-    static Ph rigid[JP_MAX_AXES], ceiling_phases[JP_MAX_AXES], best[JP_MAX_AXES], found[JP_MAX_AXES];
+    Ph *rigid = ws->rigid, *ceiling_phases = ws->ceiling_phases, *best = ws->best, *found = ws->found;
     double T0;
     double targets[JP_MAX_AXES][3];
     memcpy(targets, rq->targets, sizeof(targets));
     if (plan_rigid(&pl, targets, rq->limits, &T0, rigid) != 0) return -1;
-    if (jpi_rigid_blocks(&pl.rigid, axes, pl.states, targets, rq->limits, scratch) != 0) {
+    if (jpi_rigid_blocks(&pl.rigid, axes, pl.states, targets, rq->limits, ws) != 0) {
         snprintf(result->message, sizeof(result->message), "unreachable target: no jerk-limited profile reaches it within the limits");
         return -1;
     }
@@ -271,7 +271,7 @@ static int plan(const JpRequest *rq, JpResult *result, Ph *scratch) {
         double T = on_grid(T0, rq->ts);
         int ok = 0;
         for (int it = 0; it < 10000; it++) {
-            if (jpi_profiles_lasting(&pl.rigid, T, -1, rigid)) { ok = 1; break; }
+            if (jpi_profiles_lasting(&pl.rigid, T, -1, rigid, ws)) { ok = 1; break; }
             T += rq->ts;
         }
         if (!ok) {
@@ -351,30 +351,32 @@ static int plan(const JpRequest *rq, JpResult *result, Ph *scratch) {
     return 0;
 }
 
-int jp_plan(const JpRequest *request, JpResult *result) {
+JpWorkspace *jp_workspace_new(void) { return malloc(sizeof(JpWorkspace)); }
+
+void jp_workspace_free(JpWorkspace *workspace) { free(workspace); }
+
+int jp_plan(const JpRequest *request, JpResult *result, JpWorkspace *workspace) {
     memset(result, 0, sizeof(*result));
-    Ph *scratch = malloc(sizeof(Ph) * MAX_EXTREMAL);
-    if (scratch == NULL) {
-        snprintf(result->message, sizeof(result->message), "out of memory");
+    if (workspace == NULL) {
+        snprintf(result->message, sizeof(result->message), "no workspace (jp_workspace_new ran out of memory)");
         return -1;
     }
-    int status = plan(request, result, scratch);
-    free(scratch);
-    return status;
+    return plan(request, result, workspace);
 }
 
-int jp_rigid_duration(const JpRequest *request, double *duration, char *message, int size) {
-    Ph *scratch = malloc(sizeof(Ph) * MAX_EXTREMAL);
-    Rigid *rg = malloc(sizeof(Rigid));
+int jp_rigid_duration(const JpRequest *request, double *duration, char *message, int size, JpWorkspace *workspace) {
     int status = -1;
-    if (scratch != NULL && rg != NULL) {
+    if (workspace == NULL) {
+        snprintf(message, (size_t)size, "no workspace (jp_workspace_new ran out of memory)");
+    } else {
+        Rigid *rg = &workspace->rigid_blocks;
         double states[JP_MAX_AXES][3], targets[JP_MAX_AXES][3];
         memcpy(states, request->states, sizeof(states));
         memcpy(targets, request->targets, sizeof(targets));
         status = 0;
         for (int i = 0; i < request->axes && status == 0; i++)
             status = jpi_check_start_within(states[i], &request->limits[i], message, size, i);
-        if (status == 0 && jpi_rigid_blocks(rg, request->axes, states, targets, request->limits, scratch) == 0) {
+        if (status == 0 && jpi_rigid_blocks(rg, request->axes, states, targets, request->limits, workspace) == 0) {
             Candidate list[3 * JP_MAX_AXES];
             if (jpi_candidates(rg, list) > 0) *duration = list[0].t;
             else status = -1;
@@ -383,7 +385,5 @@ int jp_rigid_duration(const JpRequest *request, double *duration, char *message,
         }
         if (status == -1) snprintf(message, (size_t)size, "unreachable target: no jerk-limited profile reaches it within the limits");
     }
-    free(scratch);
-    free(rg);
     return status;
 }

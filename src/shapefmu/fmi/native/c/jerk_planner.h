@@ -57,12 +57,19 @@ typedef struct {
     char message[256];  /* why, when jp_plan returns nonzero */
 } JpResult;
 
+/* Every buffer a plan works in, owned by the caller: the planner keeps nothing between calls and no
+ * two workspaces share anything, so instances (an FMU's, a host's threads) plan at the same time,
+ * each in its own workspace. NULL when out of memory. */
+typedef struct JpWorkspace JpWorkspace;
+JpWorkspace *jp_workspace_new(void);
+void jp_workspace_free(JpWorkspace *workspace);
+
 /* 0 and *result filled; nonzero and result->message on an unreachable target, a start that must
  * break a limit, or a move no planner finds within the limits and bounds. */
-int jp_plan(const JpRequest *request, JpResult *result);
+int jp_plan(const JpRequest *request, JpResult *result, JpWorkspace *workspace);
 
 /* The synchronised rigid duration alone (the candidate of the blocks), for the comparison with
  * Ruckig; 0 and *duration, or nonzero and message. */
-int jp_rigid_duration(const JpRequest *request, double *duration, char *message, int size);
+int jp_rigid_duration(const JpRequest *request, double *duration, char *message, int size, JpWorkspace *workspace);
 
 #endif

@@ -11,9 +11,6 @@
 /* ------------------------------------------------------------------------------------------------
  * Step 2: a profile of a prescribed duration (profile_of_duration and its helpers) */
 
-#define SAMPLES 24
-#define MAX_POINTS 128
-
 /* _hold_profile: 1 and error, phases; 0 when the changes outlast T */
 static int hold_profile(const Problem *pr, double T, double level, double va, double *error, Ph *out) {
     const JpLimits *lim = &pr->lim;
@@ -134,11 +131,11 @@ static int bisect_meeting(const Problem *pr, double T, double low_level, double 
     return 1;
 }
 
-static int meeting_profile(const Problem *pr, double T, Ph *out, Ph *tmp) {
+static int meeting_profile(const Problem *pr, double T, Ph *out, Ph *tmp, JpWorkspace *ws) {
     const JpLimits *lim = &pr->lim;
     double span = lim->v_max - lim->v_min;
     enum { LEVELS = 2 * SAMPLES - 1 };
-    static double table[LEVELS][MAX_POINTS];
+    double (*table)[MAX_POINTS] = ws->table;
     int counts[LEVELS];
     double levels[LEVELS], points[MAX_POINTS];
     for (int k = 1; k < 2 * SAMPLES; k++) levels[k - 1] = lim->a_min + (lim->a_max - lim->a_min) * k / (2 * SAMPLES);
@@ -165,10 +162,10 @@ static int meeting_profile(const Problem *pr, double T, Ph *out, Ph *tmp) {
 }
 
 /* _with_hold: 1 and *out, 0 for None */
-static int with_hold(const Problem *pr, double T, double level, const Ph *near, Ph *out) {
+static int with_hold(const Problem *pr, double T, double level, const Ph *near, Ph *out, JpWorkspace *ws) {
     const JpLimits *lim = &pr->lim;
     if (!(lim->a_min < level && level < lim->a_max) && level != 0.0) return 0;
-    static Ph first, second, refined;
+    Ph *first = &ws->first, *second = &ws->second, *refined = &ws->refined;
     double edges[MAX_POINTS], points[MAX_POINTS], seeds[16];
     int n_seeds = near != NULL ? passing_velocities(near, level, seeds) : 0;
     int ne, np;
@@ -177,19 +174,19 @@ static int with_hold(const Problem *pr, double T, double level, const Ph *near, 
     int ok_prev = 0;
     for (int k = 0; k < np; k++) {
         double e_now;
-        int ok_now = hold_profile(pr, T, level, points[k], &e_now, &second);
+        int ok_now = hold_profile(pr, T, level, points[k], &e_now, second);
         if (k > 0 && ok_prev && ok_now && !(e_prev * e_now > 0.0)) {
-            if (refine_hold(pr, T, level, points[k - 1], points[k], e_prev, &first, &refined)
-                && jpi_accept(pr, refined.d, refined.j, refined.n, out))
+            if (refine_hold(pr, T, level, points[k - 1], points[k], e_prev, first, refined)
+                && jpi_accept(pr, refined->d, refined->j, refined->n, out))
                 return 1;
         }
-        e_prev = e_now; ok_prev = ok_now; first = second;
+        e_prev = e_now; ok_prev = ok_now; *first = *second;
     }
     return 0;
 }
 
 /* profile_of_duration: 1 and *out, 0 for None */
-static int profile_of_duration(const Problem *pr, double T, const Ph *near, Ph *out) {
+static int profile_of_duration(const Problem *pr, double T, const Ph *near, Ph *out, JpWorkspace *ws) {
     const JpLimits *lim = &pr->lim;
     double levels[64];
     int nl = 0;
@@ -202,12 +199,11 @@ static int profile_of_duration(const Problem *pr, double T, const Ph *near, Ph *
         }
     }
     for (int k = 1; k < 2 * SAMPLES; k++) levels[nl++] = lim->a_min + (lim->a_max - lim->a_min) * k / (2 * SAMPLES);
-    for (int l = 0; l < nl; l++) if (with_hold(pr, T, levels[l], near, out)) return 1;
-    static Ph tmp;
-    if (meeting_profile(pr, T, out, &tmp)) return 1;
+    for (int l = 0; l < nl; l++) if (with_hold(pr, T, levels[l], near, out, ws)) return 1;
+    if (meeting_profile(pr, T, out, &ws->meeting, ws)) return 1;
     for (int k = 1; k < 8 * SAMPLES; k++) {
         if (k % 4 == 0) continue;
-        if (with_hold(pr, T, lim->a_min + (lim->a_max - lim->a_min) * k / (8 * SAMPLES), near, out)) return 1;
+        if (with_hold(pr, T, lim->a_min + (lim->a_max - lim->a_min) * k / (8 * SAMPLES), near, out, ws)) return 1;
     }
     return 0;
 }
@@ -239,17 +235,17 @@ int jpi_check_start_within(double *state, const JpLimits *lim, char *message, in
 }
 
 int jpi_rigid_blocks(Rigid *rg, int axes, double (*states)[3], double (*targets)[3], const JpLimits *limits,
-                        Ph *scratch) {
+                        JpWorkspace *ws) {
     rg->axes = axes;
     for (int i = 0; i < axes; i++) {
         jpi_problem_set(&rg->problems[i], states[i], targets[i], &limits[i]);
-        if (jpi_block_of(&rg->problems[i], &rg->blocks[i], scratch) != 0) return -1;
+        if (jpi_block_of(&rg->problems[i], &rg->blocks[i], ws->extremal) != 0) return -1;
     }
     return 0;
 }
 
 /* profiles_lasting: 1 and out[axes], 0 for None */
-int jpi_profiles_lasting(const Rigid *rg, double T, int owner, Ph *out) {
+int jpi_profiles_lasting(const Rigid *rg, double T, int owner, Ph *out, JpWorkspace *ws) {
     for (int i = 0; i < rg->axes; i++) if (jpi_blocked(&rg->blocks[i], T)) return 0;
     for (int i = 0; i < rg->axes; i++) {
         const Block *b = &rg->blocks[i];
@@ -262,7 +258,7 @@ int jpi_profiles_lasting(const Rigid *rg, double T, int owner, Ph *out) {
             }
         } else if (T - jpi_t_min(b) <= rg->problems[i].tol_t) {
             out[i] = b->fastest;
-        } else if (!profile_of_duration(&rg->problems[i], T, &b->fastest, &out[i])) {
+        } else if (!profile_of_duration(&rg->problems[i], T, &b->fastest, &out[i], ws)) {
             return 0;
         }
     }
@@ -297,12 +293,12 @@ int jpi_candidates(const Rigid *rg, Candidate *out) {
 }
 
 int jpi_synchronise(Rigid *rg, int axes, double (*states)[3], double (*targets)[3], const JpLimits *limits,
-                       double *T, Ph *out, Ph *scratch) {
-    if (jpi_rigid_blocks(rg, axes, states, targets, limits, scratch) != 0) return -1;
+                       double *T, Ph *out, JpWorkspace *ws) {
+    if (jpi_rigid_blocks(rg, axes, states, targets, limits, ws) != 0) return -1;
     Candidate list[3 * JP_MAX_AXES];
     int n = jpi_candidates(rg, list);
     for (int k = 0; k < n; k++) {
-        if (jpi_profiles_lasting(rg, list[k].t, list[k].axis, out)) { *T = list[k].t; return 0; }
+        if (jpi_profiles_lasting(rg, list[k].t, list[k].axis, out, ws)) { *T = list[k].t; return 0; }
     }
     return -1;
 }
@@ -319,10 +315,10 @@ static int along(const double *values, const double *direction, int n, double *c
 }
 
 int jpi_straight_line(Rigid *rg, int axes, double (*states)[3], double (*targets)[3], const JpLimits *limits,
-                         double *T, Ph *out, Ph *scratch, char *message, int size) {
+                         double *T, Ph *out, JpWorkspace *ws, char *message, int size) {
     double d[JP_MAX_AXES], direction[JP_MAX_AXES], length = 0.0;
     for (int i = 0; i < axes; i++) { d[i] = targets[i][0] - states[i][0]; length = max2(length, fabs(d[i])); }
-    if (length == 0.0) return jpi_synchronise(rg, axes, states, targets, limits, T, out, scratch);
+    if (length == 0.0) return jpi_synchronise(rg, axes, states, targets, limits, T, out, ws);
     for (int i = 0; i < axes; i++) direction[i] = d[i] / length;
     double path[4], values[JP_MAX_AXES];
     int slot = 0;
@@ -353,7 +349,7 @@ int jpi_straight_line(Rigid *rg, int axes, double (*states)[3], double (*targets
     if (jpi_check_start_within(start[0], &path_limits, message, size, 0) != 0) return -2;
     Ph line;
     Rigid single;
-    if (jpi_synchronise(&single, 1, start, end, &path_limits, T, &line, scratch) != 0) return -1;
+    if (jpi_synchronise(&single, 1, start, end, &path_limits, T, &line, ws) != 0) return -1;
     for (int i = 0; i < axes; i++) {
         double jerks[MAXP];
         for (int k = 0; k < line.n; k++) jerks[k] = line.j[k] * direction[i];

@@ -110,8 +110,8 @@ static int phase_index(const double *edges, int count, double t) {
 }
 
 /* convolve_jerk */
-int jpi_convolve_jerk(const Ph *ph, const JpShaper *shaper, Ph *out) {
-    static double cuts[(MAXP + 1) * JP_MAX_IMPULSES];
+int jpi_convolve_jerk(const Ph *ph, const JpShaper *shaper, Ph *out, JpWorkspace *ws) {
+    double *cuts = ws->cuts;
     double edges[MAXP + 1];
     edges[0] = 0.0;
     for (int k = 0; k < ph->n; k++) edges[k + 1] = edges[k] + ph->d[k];
@@ -213,22 +213,23 @@ typedef struct {
     const Held *held;
     int n_held;
     const History *ringing;
+    JpWorkspace *ws;
 } System;
 
 /* _equations: F (m) and columns (n x m, column k at C[k * m]) ; returns m */
 static int equations(const System *sys, const double *d, const double *j, int n, double *F, double *C) {
-    static Ph ph;
-    jpi_ph_set(&ph, sys->start[0], sys->start[1], sys->start[2], d, j, n);
+    Ph *ph = &sys->ws->equations_phases;
+    jpi_ph_set(ph, sys->start[0], sys->start[1], sys->start[2], d, j, n);
     const double *sc = sys->scales;
     int m = 4 + sys->n_held + 2 * sys->freqs;
-    double total = ph.e[n];
-    F[0] = (ph.a[n] - sys->target[2]) / sc[0];
-    F[1] = (ph.v[n] - sys->target[1]) / sc[1];
-    F[2] = (ph.p[n] - sys->target[0]) / sc[2];
+    double total = ph->e[n];
+    F[0] = (ph->a[n] - sys->target[2]) / sc[0];
+    F[1] = (ph->v[n] - sys->target[1]) / sc[1];
+    F[2] = (ph->p[n] - sys->target[0]) / sc[2];
     F[3] = (total - sys->T) / sc[3];
     for (int k = 0; k < n; k++) {
-        double R = total - ph.e[k + 1];
-        double dv = ph.v[k + 1], da = ph.a[k + 1], dj = j[k];
+        double R = total - ph->e[k + 1];
+        double dv = ph->v[k + 1], da = ph->a[k + 1], dj = j[k];
         double *col = &C[(size_t)k * m];
         col[0] = dj / sc[0];
         col[1] = (da + dj * R) / sc[1];
@@ -239,29 +240,29 @@ static int equations(const System *sys, const double *d, const double *j, int n,
         int mm = sys->held[h].m, kind = sys->held[h].kind;
         double level = sys->held[h].level;
         int row = 4 + h;
-        if (kind == 0) F[row] = (ph.a[mm] - level) / sc[0];
-        else if (kind == 1) F[row] = (ph.v[mm] - level) / sc[1];
-        else F[row] = (ph.v[mm] - ph.a[mm] * ph.a[mm] / (2.0 * j[mm]) - level) / sc[1];
+        if (kind == 0) F[row] = (ph->a[mm] - level) / sc[0];
+        else if (kind == 1) F[row] = (ph->v[mm] - level) / sc[1];
+        else F[row] = (ph->v[mm] - ph->a[mm] * ph->a[mm] / (2.0 * j[mm]) - level) / sc[1];
         for (int k = 0; k < n; k++) {
             double value;
             if (k >= mm) value = 0.0;
             else if (kind == 0) value = j[k] / sc[0];
             else {
-                double dv = ph.a[k + 1] + j[k] * (ph.e[mm] - ph.e[k + 1]);
-                if (kind == 2) dv -= ph.a[mm] / j[mm] * j[k];
+                double dv = ph->a[k + 1] + j[k] * (ph->e[mm] - ph->e[k + 1]);
+                if (kind == 2) dv -= ph->a[mm] / j[mm] * j[k];
                 value = dv / sc[1];
             }
             C[(size_t)k * m + row] = value;
         }
     }
-    static Cx steps[MAXP + 1];
+    Cx *steps = sys->ws->steps;
     for (int f = 0; f < sys->freqs; f++) {
         double omega = sys->omegas[f], zeta = sys->zetas[f];
         double sre = -zeta * omega, sim = omega * sqrt(1.0 - zeta * zeta);
         double previous = 0.0;
         for (int k = 0; k <= n; k++) {
             double level = k < n ? j[k] : 0.0;
-            Cx e = cx_exp(sre * (sys->T - ph.e[k]), sim * (sys->T - ph.e[k]));
+            Cx e = cx_exp(sre * (sys->T - ph->e[k]), sim * (sys->T - ph->e[k]));
             double step = level - previous;
             steps[k].re = step * e.re; steps[k].im = step * e.im;
             previous = level;
@@ -288,8 +289,8 @@ static int equations(const System *sys, const double *d, const double *j, int n,
 }
 
 /* _least_norm_step: 0 and dx, or -1 */
-static int least_norm_step(const double *C, const int *frozen, int n, int m, const double *F, double *dx) {
-    static double M[MAX_EQ * MAX_EQ], L[MAX_EQ * MAX_EQ];
+static int least_norm_step(const double *C, const int *frozen, int n, int m, const double *F, double *dx, JpWorkspace *ws) {
+    double *M = ws->M, *L = ws->L;
     double y[MAX_EQ];
     for (int i = 0; i < m; i++)
         for (int q = 0; q <= i; q++) {
@@ -340,7 +341,8 @@ static double norm(const double *F, int m) {
 /* cancel: 1 and (d, j, n) solved; 0 for None */
 int jpi_cancel(const double *start, const double *target, const JpLimits *lim, double T, const JpMode *modes,
                   int n_modes, const Ph *rigid, const History *ringing, const double *omegas, const double *zetas,
-                  int freqs, int doublets, const Held *pins, int n_pins, double *d_out, double *j_out, int *n_out) {
+                  int freqs, int doublets, const Held *pins, int n_pins, double *d_out, double *j_out, int *n_out,
+                  JpWorkspace *ws) {
     double S_rigid = -INFINITY, omega_low = INFINITY;
     for (int f = 0; f < freqs; f++) {
         Cx S = jerk_sum(rigid->d, rigid->j, rigid->n, jpi_ph_duration(rigid), omegas[f], zetas[f], ringing);
@@ -349,7 +351,7 @@ int jpi_cancel(const double *start, const double *target, const JpLimits *lim, d
     }
     double j_max = lim->j_max;
     double tau = S_rigid > 0.0 ? sqrt(S_rigid / (j_max * omega_low * omega_low) / freqs) : 0.0;
-    static double x[MAXP], jerks[MAXP], trial[MAXP], dx[MAXP];
+    double *x = ws->x, *jerks = ws->jerks, *trial = ws->trial, *dx = ws->dx;
     int n;
     if (doublets) {
         int all_zero = 1;
@@ -362,19 +364,16 @@ int jpi_cancel(const double *start, const double *target, const JpLimits *lim, d
         memcpy(x, rigid->d, sizeof(double) * (size_t)n);
         memcpy(jerks, rigid->j, sizeof(double) * (size_t)n);
     }
-    static Held held[MAX_HELD];
+    Held *held = ws->held;
     int n_held = held_limits(x, jerks, n, start, lim, held);
     for (int q = 0; q < n_pins && n_held < MAX_HELD; q++) held[n_held++] = pins[q];
     double v_scale = max2(lim->v_max, -lim->v_min), a_scale = max2(lim->a_max, -lim->a_min);
     System sys = {start, target, T, omegas, zetas, freqs, {a_scale, v_scale, v_scale * T, T, max2(S_rigid, j_max * 1e-12)},
-                  held, n_held, ringing};
+                  held, n_held, ringing, ws};
     int m = 4 + n_held + 2 * freqs;
     if (m > MAX_EQ) return 0;
-    static double F[MAX_EQ], F_trial[MAX_EQ];
-    double *C = malloc(sizeof(double) * (size_t)n * (size_t)m);
-    double *C_trial = malloc(sizeof(double) * (size_t)n * (size_t)m);
+    double *F = ws->F, *F_trial = ws->F_trial, *C = ws->C, *C_trial = ws->C_trial;
     int frozen[MAXP];
-    if (C == NULL || C_trial == NULL) { free(C); free(C_trial); return 0; }
     equations(&sys, x, jerks, n, F, C);
     double current = norm(F, m);
     int ok = 1;
@@ -382,7 +381,7 @@ int jpi_cancel(const double *start, const double *target, const JpLimits *lim, d
         if (current < 1e-14) break;
         for (int k = 0; k < n; k++) frozen[k] = 0;
         for (;;) {
-            if (least_norm_step(C, frozen, n, m, F, dx) != 0) { ok = 0; break; }
+            if (least_norm_step(C, frozen, n, m, F, dx, ws) != 0) { ok = 0; break; }
             int any = 0;
             for (int k = 0; k < n; k++) if (x[k] <= 0.0 && dx[k] < 0.0 && !frozen[k]) { frozen[k] = 2; any = 1; }
             if (!any) break;
@@ -409,7 +408,6 @@ int jpi_cancel(const double *start, const double *target, const JpLimits *lim, d
         }
         if (!moved) break;
     }
-    free(C); free(C_trial);
     if (!ok) return 0;
     if (!(current < 1e-11)) return 0;
     memcpy(d_out, x, sizeof(double) * (size_t)n);
