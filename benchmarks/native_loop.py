@@ -12,45 +12,31 @@ import subprocess
 import tempfile
 import zipfile
 from pathlib import Path
-from types import SimpleNamespace
 
 from fmpy import read_model_description
 
 from shapefmu.fmi.native.compile import LAYER_HEADERS, LAYER_SOURCES, build_binaries, build_description, copy_c_files, zip_fmu
-from shapefmu.fmi.python.model_description import model_description
-from shapefmu.fmi.python.slave_base import Variable
+from shapefmu.fmi.description import ModelDescription, fmi2
+from shapefmu.fmi.kinds.interface import input_, output
 
 HERE = Path(__file__).parent
 HEADERS = HERE.parent / "src" / "shapefmu" / "fmi" / "native" / "c"
 GUID = "{00000000-0000-0000-0000-00000000e0f7}"
 
-# The empty model part: u in, y out, a step that does nothing (every hook of fmi2_model.h, minimal).
-EMPTY_MODEL = r"""#include <string.h>
-#include "fmi2_model.h"
+# The empty model part: u in, y out, a step that does nothing (model.h: the hooks it cannot do without;
+# the layer's defaults for the rest).
+EMPTY_MODEL = r"""#include <stddef.h>
+#include "model.h"
 
-static const char *const names[] = {"u", "y"};
-void model_describe(Fmi2ModelInfo *info) { memset(info, 0, sizeof *info); info->guid = "%GUID%"; info->n_real = 2; }
-int model_instantiate(Fmi2Instance *inst) { model_reset(inst); return 0; }
-void model_free(Fmi2Instance *inst) { (void)inst; }
-void model_reset(Fmi2Instance *inst) { inst->reals[0] = inst->reals[1] = 0.0; }
-Fmi2Role model_variable(const Fmi2Instance *inst, Fmi2Type type, size_t vr, const char **name) {
-    (void)inst;
-    if (type != FMI2_REAL || vr > 1) return FMI2_NO_VARIABLE;
-    *name = names[vr];
-    return vr == 0 ? FMI2_INPUT : FMI2_COMPUTED;
+static const VariableRow rows[] = {{"u", ROLE_INPUT, 0, 0.0, NULL}, {"y", ROLE_COMPUTED, 0, 0.0, NULL}};
+static const VariableTable variables = {"%GUID%", 2, 0, 0, 0, rows};
+
+static ModelStatus do_step(ModelInstance *inst, double t, double h, const char *f) {
+    (void)inst, (void)t, (void)h, (void)f;
+    return MODEL_OK;
 }
-fmi2Status model_check_real(Fmi2Instance *inst, size_t vr, double value, const char *f) { (void)inst; (void)vr; (void)value; (void)f; return fmi2OK; }
-fmi2Status model_check_integer(Fmi2Instance *inst, size_t vr, int value, const char *f) { (void)vr; (void)value; return fmi2_fail(inst, "%s: no Integer", f); }
-fmi2Status model_check_string(Fmi2Instance *inst, size_t vr, const char *value, const char *f) { (void)vr; (void)value; return fmi2_fail(inst, "%s: no String", f); }
-void model_changed(Fmi2Instance *inst, size_t vr) { (void)inst; (void)vr; }
-fmi2Status model_update(Fmi2Instance *inst, const char *f) { (void)inst; (void)f; return fmi2OK; }
-fmi2Status model_exit_initialization(Fmi2Instance *inst) { (void)inst; return fmi2OK; }
-fmi2Status model_do_step(Fmi2Instance *inst, double t, double h) { (void)inst; (void)t; (void)h; return fmi2OK; }
-size_t model_state_size(const Fmi2Instance *inst) { (void)inst; return 0; }
-void model_save_state(const Fmi2Instance *inst, unsigned char *bytes) { (void)inst; (void)bytes; }
-int model_restore_state(Fmi2Instance *inst, const unsigned char *bytes, size_t size) { (void)inst; (void)bytes; return size ? -1 : 0; }
-void model_states_changed(Fmi2Instance *inst) { (void)inst; }
-fmi2Status model_partial_derivative(Fmi2Instance *inst, size_t u, size_t k, double *e, const char *f) { (void)u; (void)k; (void)e; return fmi2_fail(inst, "%s: none", f); }
+
+const ModelPart model_part = {.variables = &variables, .do_step = do_step};
 """
 
 
@@ -65,13 +51,13 @@ def build_empty_native(path: Path) -> Path:
         c_files = [*LAYER_SOURCES, "model.c"]
         (sources / "buildDescription.xml").write_text(build_description("Empty", c_files))
         build_binaries(root, "Empty", c_files, "empty native")
-        variables = [Variable("u", 0, "Real", "input", "continuous", 0.0, "1", "input"),
-                     Variable("y", 1, "Real", "output", "continuous", 0.0, "1", "output, always 0")]
-        view = SimpleNamespace(model_name="Empty", variables=variables, values={"u": 0.0, "y": 0.0},
-                               description="empty native FMU: the generic layer alone")
-        (root / "modelDescription.xml").write_text(model_description(
-            view, GUID, {"y": []}, (0.0, 1.0, 1e-3), "", native_sources=tuple(c_files),
-            log_categories=(("logStatusError", "errors"), ("logAll", "debug"))))
+        description = ModelDescription(
+            model_name="Empty", identifier="Empty", guid=GUID, description="empty native FMU: the generic layer alone",
+            generation_tool="shapefmu benchmarks/native_loop.py",
+            variables=(input_("u", 0.0, "input"), output("y", "output, always 0")), dependencies={"y": []},
+            log_categories=(("logStatusError", "errors"), ("logAll", "debug")), experiment=(0.0, 1.0, 1e-3),
+            source_files=tuple(c_files))
+        (root / "modelDescription.xml").write_text(fmi2.write(description))
         return zip_fmu(root, Path(path))
 
 

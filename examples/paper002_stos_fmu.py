@@ -2,7 +2,7 @@
 
 The STOSController FMU closes the loop on the disk-drive plant FMU of Table I (2.0 and 3.0 kHz
 modes, zeta = 0.01, b2 = -b4i = 2.7e3, U = 11 V; generated with its rigid-body velocity as an
-output, ``cosim.compare.measured_plant``, because the law measures x_r and x_r'): the system of
+output, ``compare.measured_plant``, because the law measures x_r and x_r'): the system of
 models/disk_drive_stos.ssd, run by the master (Gauss-Seidel, step = the law's Ts = 1 us) for a
 0.1 rad seek with the convolution and the simultaneous shaper, the settle controller of
 ``stos.stos_law`` bound as parameters as in the .ssd. Printed beside examples/stos_disk_drive.py's
@@ -14,7 +14,7 @@ controller's hand-over, which the FMU does not output), and how far the two path
 differ. The paper reports that the
 simultaneous-shaper STOS is 12.08 us faster than the convolution one (with its shaper times).
 
-By default the FMUs are built into fmus/ (``cosim.compare.FMUCache``: rebuilt when their sources
+By default the FMUs are built into fmus/ (``compare.FMUCache``: rebuilt when their sources
 change) under the names the .ssd refers to. Writes results/paper002_stos_fmu.png (like Fig. 6).
 
     .venv/bin/python examples/paper002_stos_fmu.py
@@ -28,8 +28,8 @@ from pathlib import Path
 import numpy as np
 
 from shapefmu.cosim import Master
-from shapefmu.cosim.compare import FMUCache
-from shapefmu.fmi.python.slaves.stos_controller import SETTLE_GAINS
+from shapefmu.compare import FMUCache
+from shapefmu.fmi.kinds.stos_controller import SETTLE_GAINS
 from shapefmu.fmi.ssp import read_ssp
 from shapefmu.optimal import time_optimal
 from shapefmu.plants import library

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from shapefmu.cosim.compare import compare, move_metrics
+from shapefmu.compare import compare, move_metrics
 from shapefmu.optimal import compare_moves
 from shapefmu.plants import load
 from shapefmu.shapers import zvd
@@ -184,19 +184,20 @@ def test_an_fmi3_shaper_fed_its_modes_by_an_array_parameter_set_gives_the_demos_
     """The FMI 3.0 native Shaper and plant, the modes reaching the Shaper as the array parameters f and
     zeta of an .ssv parameter set (closed-form zv: re-designed in C from them; the build had other
     modes), run by the master from the .ssp: the demo's row, to its printed digits."""
-    from shapefmu.cosim.compare import Comparison, CandidateRun, FMUCache, _mode_arrays, _modes_hz, _signal_table
+    from shapefmu.compare import Comparison, CandidateRun, FMUCache
+    from shapefmu.compare.systems import mode_arrays, modes_hz, signal_table
     from shapefmu.cosim.master import Master
     from shapefmu.fmi.ssp import System, read_ssp, write_system
     from shapefmu.optimal import rigid_bang_bang
 
     plant = load(MODEL)
     fmus = FMUCache(cache, native=True, fmi_version="3.0")
-    modes = _modes_hz(plant)
+    modes = modes_hz(plant)
     built_for = modes if name == "simultaneous" else {"n_modes": 2, "f[1]": 1000.0, "f[2]": 1500.0}  # zv: other modes
     kind = {"convolution": "zv", "simultaneous": "simultaneous"}[name]
     shaper = fmus.slave("Shaper", kind=kind, Ts=H, **built_for)
-    player = fmus.slave("ReferencePlayer", table=_signal_table(rigid_bang_bang(plant, X, U)))
-    arrays = _mode_arrays(modes, shaper)
+    player = fmus.slave("ReferencePlayer", table=signal_table(rigid_bang_bang(plant, X, U)))
+    arrays = mode_arrays(modes, shaper)
     assert len(arrays["f"]) == 4 and arrays["f"][:2] == [modes["f[1]"], modes["f[2]"]]
     system = (System("shaped").add("plant", fmus.plant(plant)).add("player", player)
               .add("shaper", shaper, arrays)

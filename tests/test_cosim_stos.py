@@ -11,7 +11,7 @@ import pytest
 from support.ssp_hosts import run_ecos, run_libcosim
 
 from shapefmu.cosim import simulate
-from shapefmu.cosim.compare import FMUCache, move_metrics
+from shapefmu.compare import FMUCache, move_metrics
 from shapefmu.fmi.ssp import read_ssp
 from shapefmu.plants import load
 from shapefmu.stos import simulate_stos, stos_law

@@ -105,7 +105,7 @@ def test_ekf_tuned_table_matches_the_design_example(paper001_result):
 @pytest.fixture(scope="module")
 def paper002_result(stos_fmu, tmp_path_factory):
     """The project's models/disk_drive_stos.ssd, its FMUs where its sources point (../fmus/)."""
-    from shapefmu.cosim.compare import measured_plant
+    from shapefmu.compare import measured_plant
     from shapefmu.fmi.native import build_plant_fmu
 
     root = tmp_path_factory.mktemp("paper002")

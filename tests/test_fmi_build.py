@@ -12,7 +12,7 @@ from support.hosts import run_ecos_program, run_fmpy, y_of_u
 from shapefmu.cli import main
 from shapefmu.fmi import build_fmu
 from shapefmu.fmi.python.builder import bundled_sources, package_name
-from shapefmu.fmi.python.slaves import SLAVES
+from shapefmu.fmi.kinds import KINDS as SLAVES
 
 def test_every_registered_fmu_builds_and_validates(all_fmus):
     assert sorted(p.stem for p in all_fmus) == sorted(SLAVES)

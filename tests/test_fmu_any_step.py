@@ -20,7 +20,7 @@ import pytest
 from support.c_hosts import fmu_arguments, host_rows, run_host
 from support.sampled_reference import SampledRun
 
-from shapefmu.fmi.python.slaves import SLAVES
+from shapefmu.fmi.kinds import KINDS as SLAVES
 from shapefmu.runtime import shaper_designs
 from shapefmu.runtime.ekf_tuner import EKFTunedShaperKernel
 from shapefmu.runtime.stos import STOSKernel, stos_curves

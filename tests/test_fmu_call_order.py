@@ -11,7 +11,7 @@ fmi2Reset and fmi2FreeInstance are accepted, so fmi2Terminate is refused and OMS
 the instance early; and a freed instance leaves a small handle behind, so a host's call on it is
 refused instead of reaching freed memory. Our C host (hosts_c/fmi2_host.c) replays OMSimulator's
 teardown (``--on-error omsimulator``) and arbitrary call lists (``--calls``). The reference for
-every refusal is the FMI 2.0 state machine as the native plant FMUs implement it (plant_fmi2.c): in
+every refusal is the FMI 2.0 state machine as the native plant FMUs implement it (plant_part.c): in
 the same states they answer the same calls with the same status and message.
 """
 

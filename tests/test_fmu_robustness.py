@@ -1,6 +1,6 @@
 """No call order or value crashes or hangs a host: random FMI call sequences through fmpy, on every FMU.
 
-Every FMU registered in ``shapefmu.fmi.python.slaves.SLAVES`` gets the same random sequences (setters and
+Every FMU kind of ``shapefmu.fmi.kinds.KINDS`` gets the same random sequences (setters and
 getters on any value reference, steps of any size, initialisation, reset, state save, restore and
 serialisation in any order), built with its session fixture. The sequences run in a subprocess
 with a timeout, so a crash (a signal) or a hang fails the test instead of killing pytest. A call
@@ -13,7 +13,7 @@ import textwrap
 
 import pytest
 
-from shapefmu.fmi.python.slaves import SLAVES
+from shapefmu.fmi.kinds import KINDS as SLAVES
 
 # The session fixture (tests/fixtures_fmi.py) that builds each registered FMU.
 FIXTURES = {

@@ -80,10 +80,10 @@ BAD_FIELDS = [
     ("b2 = { value = 2.7e3,", 'b2 = { value = "big",', "parameters.b2.value must be a finite number"),
     ('zeta = { value = [0.01, 0.01], unit = "1"', "zeta = { value = [0.01, 0.01], unit = 1",
      "parameters.zeta.unit is missing"),
-    ('voltage = { unit = "V", max = 11.0 }', 'voltage = { unit = "V", max = 1' + "0" * 400 + " }",
+    ('voltage = { unit = "V", max = 11.0', 'voltage = { unit = "V", max = 1' + "0" * 400,
      "inputs.voltage.max must be a finite number"),
-    ('position = { unit = "rad" }', '"pos */ x" = { unit = "rad" }', "must be an identifier"),
-    ('position = { unit = "rad" }', 'position = { unit = "rad\\u0000" }', "outputs.position.unit holds the control"),
+    ('position = { unit = "rad"', '"pos */ x" = { unit = "rad"', "must be an identifier"),
+    ('position = { unit = "rad"', 'position = { unit = "rad\\u0000"', "outputs.position.unit holds the control"),
     ('description = "rigid-body input gain"', "description = 7", "parameters.b2.description must be a string"),
 ]
 

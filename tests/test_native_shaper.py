@@ -135,7 +135,7 @@ def test_closed_form_redesign_in_c_follows_new_modes(native_shapers):
 
 
 def test_filters_equal_the_pythonfmu_filter_and_their_taps(native_filters, builds):
-    from shapefmu.fmi.python.slaves.shape_filter import design_taps as filter_taps
+    from shapefmu.fmi.kinds.shape_filter import design_taps as filter_taps
 
     python = builds.pythonfmu("ShapeFilter", kind="rectangle")  # declares feed-through: runs every kind
     for name, (path, starts) in native_filters.items():
@@ -152,9 +152,9 @@ def test_filters_equal_the_pythonfmu_filter_and_their_taps(native_filters, build
 
 
 def default_filter_values():
-    from shapefmu.fmi.python.slaves.shape_filter import ShapeFilter
+    from shapefmu.fmi.kinds.shape_filter import INTERFACE
 
-    return dict(ShapeFilter().values)
+    return INTERFACE.start_values()
 
 
 def test_outputs_identical_in_fmpy_libcosim_and_ecos(native_shapers, native_filters, quiet_libcosim):

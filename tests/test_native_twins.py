@@ -17,7 +17,7 @@ def test_the_command_line_builds_the_ekf_tuner_and_every_twin(tmp_path, monkeypa
     assert code == 0, err
     starts = {v.name: v.start for v in read_model_description(str(out)).modelVariables}
     assert (starts["kind"], float(starts["omega0"]), float(starts["Ts"])) == ("mzv", 50.0, 2e-3)
-    assert "sources/ekf_tuner_fmi2.c" in zipfile.ZipFile(out).namelist()
+    assert "sources/ekf_tuner_part.c" in zipfile.ZipFile(out).namelist()
     code, _, err = guarded(["build", "ekf-tuner", "--native", "--omega0", "-5", "-o", out])
     assert code == 2 and err.count("\n") == 1 and "omega0 must be > 0" in err, err
     monkeypatch.setattr(native, "build_all", lambda models, folder, fmi_version, progress=None: [])  # the plants have their own tests
@@ -43,6 +43,6 @@ def test_the_command_line_builds_the_other_twins_from_parameters(tmp_path, time_
     assert code == 0, err
     (tmp_path / "solution.json").write_text(time_optimal_solution.to_json())
     code, _, err = guarded(["build", "reference", tmp_path / "solution.json", "--native", "-o", tmp_path / "R.fmu"])
-    assert code == 0 and "sources/table_fmi2.c" in zipfile.ZipFile(tmp_path / "R.fmu").namelist(), err
+    assert code == 0 and "sources/table_part.c" in zipfile.ZipFile(tmp_path / "R.fmu").namelist(), err
     code, _, err = guarded(["build", "profile", "--param", "null=two", "-o", tmp_path / "P2.fmu"])
     assert code == 2 and "--param null is an Integer parameter of ProfileGenerator, got 'two'" in err

@@ -14,7 +14,7 @@ import shutil
 import numpy as np
 import pytest
 import scipy.linalg
-from support.fixtures_plants import LINEAR_PLANTS, MODELS, SCHEDULED_PLANTS
+from support.fixtures_plants import LINEAR_PLANTS, MODELS
 from fmpy import extract, read_model_description, simulate_fmu
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Model, FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, fmi2Error
@@ -25,11 +25,11 @@ from shapefmu.plants import load, loads
 
 # Horizons: a few periods of each plant's slowest flexible mode; CS step: well below its fastest.
 STOP_TIME = {"disk_drive": 2e-3, "disk_drive_back_emf": 2e-3, "linear_synchronous_motor": 0.2,
-             "ten_pendula": 5.0, "mass_spring_chain": 1.0}
+             "ten_pendula": 5.0, "mass_spring_chain": 1.0, "printer_bed": 0.2, "gantry_crane": 5.0}
 STEP = {"disk_drive": 1e-5, "disk_drive_back_emf": 1e-5, "linear_synchronous_motor": 1e-3,
-        "ten_pendula": 1e-2, "mass_spring_chain": 5e-3}
+        "ten_pendula": 1e-2, "mass_spring_chain": 5e-3, "printer_bed": 1e-3, "gantry_crane": 1e-2}
 INPUT_SCALE = {"disk_drive": 11.0, "disk_drive_back_emf": 11.0, "linear_synchronous_motor": 1.0,
-               "ten_pendula": 0.7, "mass_spring_chain": 10.0}
+               "ten_pendula": 0.7, "mass_spring_chain": 10.0, "printer_bed": 1.0, "gantry_crane": 1.0}
 
 
 def variables(fmu):
@@ -137,7 +137,7 @@ def run_steps(instance, outputs, steps, input_name=None, inputs=None, t0=0.0):
 # ------------------------------------------------------------------------------------------ validity
 
 def test_every_plant_of_models_is_built(plant_fmus):
-    assert set(plant_fmus) == {*LINEAR_PLANTS, *SCHEDULED_PLANTS, "pendulum"}
+    assert set(plant_fmus) == {*LINEAR_PLANTS, "pendulum"}
 
 
 @pytest.mark.parametrize("name", [*LINEAR_PLANTS, "pendulum"])
@@ -314,6 +314,28 @@ def test_linear_directional_derivatives_are_the_state_space_matrices(plant_fmus)
     column = instance.fmu.getDirectionalDerivative(der + out, [refs["force"]], [1.0])
     np.testing.assert_allclose(column, np.concatenate([plant.B[:, 0], plant.D[:, 0]]), rtol=1e-14, atol=1e-14)
     instance.free()
+
+
+def test_sprung_mass_is_a_tunable_parameter_that_moves_the_mode_as_sqrt_k_over_m(plant_fmus):
+    """The printer bed gaining 300 g: masses[1] = 1.3 kg set in the FMU gives, in the state matrix it
+    reports (directional derivatives), the mode omega = sqrt(k / m), zeta = c / (2 sqrt(k m)) of the
+    spring and damper written in models/printer_bed.toml (Marlin #26655: 30 Hz -> 26.3 Hz)."""
+    import tomllib
+
+    written = tomllib.loads((MODELS / "printer_bed.toml").read_text())["parameters"]
+    k, c = written["stiffnesses"]["value"][0], written["dampers"]["value"][0]
+    names = variables(plant_fmus["printer_bed"])
+    assert names["masses[1]"].causality == "parameter" and names["masses[1]"].variability == "tunable"
+    instance = Instance(plant_fmus["printer_bed"], kind="ModelExchange").start({"masses[1]": 1.3})
+    refs, states = instance.refs, ("x", "v", "e_1", "de_1")
+    der = [refs[f"der(state.{s})"] for s in states]
+    A = np.array([instance.fmu.getDirectionalDerivative(der, [refs[f"state.{s}"]], [1.0]) for s in states]).T
+    instance.free()
+    poles = [p for p in np.linalg.eigvals(A) if p.imag > 0]
+    omega, zeta = abs(poles[0]), -poles[0].real / abs(poles[0])
+    assert omega == pytest.approx(math.sqrt(k / 1.3), rel=1e-12)
+    assert zeta == pytest.approx(c / (2.0 * math.sqrt(k * 1.3)), rel=1e-12)
+    assert omega / (2.0 * math.pi) == pytest.approx(30.0 / math.sqrt(1.3), rel=1e-9)
 
 
 # ------------------------------------------------------------------------------------------ FMU state

@@ -13,6 +13,8 @@ CASES = {
     "linear_synchronous_motor": (1e-3, 200, {}, 1.0),
     "ten_pendula": (1e-2, 300, {"lengths[10]": 0.9}, 0.7),
     "mass_spring_chain": (5e-3, 200, {"masses[3]": 0.3}, 10.0),
+    "printer_bed": (1e-3, 200, {"masses[1]": 1.3}, 1.0),
+    "gantry_crane": (1e-2, 300, {"lengths[1]": 2.0}, 1.0),
     "pendulum": (1e-2, 200, {"state.theta": 1.0, "c": 0.1}, 3.0),
 }
 

@@ -31,6 +31,7 @@ from shapefmu.runtime.checks import check_count, check_finite, check_positive
 from shapefmu.runtime.ekf import ResonanceEKF
 from shapefmu.runtime.ekf_tuner import KINDS, EKFTunedShaperKernel
 from shapefmu.runtime.tracked_shaper import TrackedShaperKernel, tracking_tuning
+from shapefmu.runtime.units import RadPerSecond
 from shapefmu.shapers import ImpulseShaper
 
 __all__ = [
@@ -52,6 +53,13 @@ class ModeEstimate:
     EKF's convergence test at the last sample (covariance of omega and sigma below threshold and
     both stable over the last period); ``missing`` counts the samples skipped as None/NaN and
     ``resets`` the steps after which the filter had to return to its last good estimate.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> e = ModeEstimate(62.8, 1.26, 62.81, 0.02, np.empty((0, 2)), True)
+    >>> e.zeta, e.converged, e.missing
+    (0.02, True, 0)
     """
 
     omega_d: float
@@ -123,7 +131,7 @@ def _run(ekf: ResonanceEKF, y: np.ndarray) -> np.ndarray:
 def estimate_mode(
     y,
     fs: float,
-    omega0: float,
+    omega0: RadPerSecond,
     sigma0: float = 0.0,
     *,
     amplitude: float | None = None,
@@ -147,6 +155,15 @@ def estimate_mode(
     starts within the linear range and uses all of it, bringing the frequency error of a heavily
     damped ring-down (zeta = 0.1) from about twice to within a few percent of the Cramer-Rao bound.
     Use 1 for exactly what the streaming ``ModeEstimator`` would report at the end of the record.
+
+    Examples
+    --------
+    >>> import math, numpy as np
+    >>> fs, t, omega_d = 1000.0, np.arange(2000) / 1000.0, 2 * math.pi * 10.0 * math.sqrt(1 - 0.02**2)
+    >>> y = np.exp(-2 * math.pi * 10.0 * 0.02 * t) * np.cos(omega_d * t)  # 10 Hz, 2 % damping, 2 s at 1 kHz
+    >>> e = estimate_mode(y, fs, 0.9 * omega_d)  # from a guess 10 % low
+    >>> round(e.omega_n / (2 * math.pi), 3), round(e.zeta, 3), e.converged
+    (10.0, 0.02, True)
     """
     fs, omega0, options = _ekf_options(fs, omega0, sigma0, 1.0 if amplitude is None else amplitude, q, r, p0,
                                        omega_tol, sigma_tol)
@@ -170,22 +187,21 @@ class ModeEstimator:
 
     Same parameters as ``estimate_mode`` except that ``amplitude`` (the expected signal scale, which
     a stream cannot look ahead for) defaults to 1.
+
+    Examples
+    --------
+    >>> import math, numpy as np
+    >>> fs, t, omega_d = 1000.0, np.arange(2000) / 1000.0, 2 * math.pi * 10.0 * math.sqrt(1 - 0.02**2)
+    >>> y = np.exp(-2 * math.pi * 10.0 * 0.02 * t) * np.cos(omega_d * t)  # 10 Hz, 2 % damping, 2 s at 1 kHz
+    >>> estimator = ModeEstimator(fs, 0.9 * omega_d)
+    >>> converged = [estimator.update(sample) for sample in y]
+    >>> converged[-1], round(estimator.estimate().omega_n / (2 * math.pi), 2)
+    (True, 10.0)
     """
 
-    def __init__(
-        self,
-        fs: float,
-        omega0: float,
-        sigma0: float = 0.0,
-        *,
-        amplitude: float = 1.0,
-        q=None,
-        r: float | None = None,
-        p0=None,
-        omega_tol: float = 2e-3,
-        sigma_tol: float = 5e-3,
-        record: bool = True,
-    ):
+    def __init__(self, fs: float, omega0: RadPerSecond, sigma0: float = 0.0, *, amplitude: float = 1.0, q=None,
+                 r: float | None = None, p0=None, omega_tol: float = 2e-3, sigma_tol: float = 5e-3,
+                 record: bool = True):
         fs, omega0, options = _ekf_options(fs, omega0, sigma0, amplitude, q, r, p0, omega_tol, sigma_tol)
         self.ekf = ResonanceEKF(fs, omega0, **options)
         self._history = [] if record else None
@@ -213,12 +229,20 @@ class ModeEstimator:
         return ModeEstimate(e.omega_d, e.sigma, e.omega_n, e.zeta, history, e.converged, e.missing, e.resets)
 
 
-def log_decrement_zeta(y, fs: float, omega_d: float, periods: int | None = None) -> float:
+def log_decrement_zeta(y, fs: float, omega_d: RadPerSecond, periods: int | None = None) -> float:
     """Damping ratio of a ring-down by the log-decrement of eq. (31), from its positive peaks.
 
     Peaks are taken one per damped period (2 pi / omega_d) from the start of ``y``, each refined by
     a parabola through the three samples around it; ``periods`` limits how many are used. An
     estimate independent of the EKF, for checking it.
+
+    Examples
+    --------
+    >>> import math, numpy as np
+    >>> fs, t, omega_d = 1000.0, np.arange(2000) / 1000.0, 2 * math.pi * 10.0 * math.sqrt(1 - 0.02**2)
+    >>> y = np.exp(-2 * math.pi * 10.0 * 0.02 * t) * np.cos(omega_d * t)  # 10 Hz, 2 % damping, 2 s at 1 kHz
+    >>> round(log_decrement_zeta(y, fs, omega_d), 3)
+    0.02
     """
     y = _signal(y)
     fs = check_positive(fs, "fs")
@@ -253,12 +277,22 @@ class EKFTunedShaper:
     ``shapefmu.shapers`` (e.g. ``shapers.ei``). Until the estimate has converged commands pass
     through unshaped; a new design is switched in when the command rests (see
     ``shapefmu.runtime.ekf_tuner`` for why). Same EKF options as ``ModeEstimator``.
+
+    Examples
+    --------
+    >>> import math, numpy as np
+    >>> fs, t, omega_d = 1000.0, np.arange(2000) / 1000.0, 2 * math.pi * 10.0 * math.sqrt(1 - 0.02**2)
+    >>> y = np.exp(-2 * math.pi * 10.0 * 0.02 * t) * np.cos(omega_d * t)  # 10 Hz, 2 % damping, 2 s at 1 kHz
+    >>> tuner = EKFTunedShaper(fs, 0.9 * omega_d)  # ZVD for what the EKF finds
+    >>> shaped = tuner.run(np.zeros(y.size), y)
+    >>> tuner.designs, len(tuner.shaper), round(tuner.shaper.duration, 3)  # one damped period
+    (1, 3, 0.1)
     """
 
     def __init__(
         self,
         fs: float,
-        omega0: float,
+        omega0: RadPerSecond,
         shaper: str | ShaperDesign = "zvd",
         *,
         n: int = 1,
@@ -275,7 +309,7 @@ class EKFTunedShaper:
         if callable(shaper):
             design = shaper
 
-            def kind(omega_n, zeta):
+            def kind(omega_n: RadPerSecond, zeta):
                 s = design(omega_n, zeta)
                 return list(s.times), list(s.amplitudes)
 
@@ -348,7 +382,7 @@ class TrackedShaper:
     """
 
     fs: float
-    omega0: float
+    omega0: RadPerSecond
     noise: float
     amplitude: float
     zeta0: float = 0.0

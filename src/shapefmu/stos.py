@@ -46,6 +46,12 @@ def rigid_body(plant) -> tuple[float, float]:
     The plant's states 0 and 1 must be the rigid-body position and velocity, decoupled from the
     flexible modes (the modal form that ``library.rigid_flexible`` and ``models/disk_drive*.toml``
     build), with a free integrator: A[0] = e_1, A[1] = [0, -damping, 0, ...], B[1] = b > 0.
+
+    Examples
+    --------
+    >>> from shapefmu.plants.library import disk_drive
+    >>> rigid_body(disk_drive())  # paper 002, Table I: b = 2.7e3, no back EMF
+    (2700.0, 0.0)
     """
     plant = as_plant(plant)
     A, B = plant.A, plant.B
@@ -75,7 +81,16 @@ def rigid_body(plant) -> tuple[float, float]:
 
 def with_mode_error(plant, factor: float) -> Plant:
     """The plant of eq. (1) with every flexible natural frequency multiplied by ``factor`` (zeta kept):
-    the plant a law designed for the nominal one meets under a frequency error."""
+    the plant a law designed for the nominal one meets under a frequency error.
+
+    Examples
+    --------
+    >>> import math
+    >>> from shapefmu.plants.library import disk_drive
+    >>> faster = with_mode_error(disk_drive(), 1.1)  # 2.0 and 3.0 kHz become 2.2 and 3.3 kHz
+    >>> [round(math.sqrt(-faster.A[k + 1, k]) / (2 * math.pi), 6) for k in (2, 4)]
+    [2200.0, 3300.0]
+    """
     plant = as_plant(plant)
     rigid_body(plant)
     factor = check_positive(factor, "factor")
@@ -105,7 +120,14 @@ def _flexible_modes(plant: Plant) -> list[tuple[float, float]]:
 
 def shaper_for(plant, kind: str = "simultaneous") -> ImpulseShaper:
     """A positive multi-mode shaper for the plant's flexible modes: ``convolution`` (ZV per mode,
-    paper 002 Sec. II-A), ``simultaneous`` (eq. 20), or a robust ``zvd`` / ``ei`` per mode convolved."""
+    paper 002 Sec. II-A), ``simultaneous`` (eq. 20), or a robust ``zvd`` / ``ei`` per mode convolved.
+
+    Examples
+    --------
+    >>> from shapefmu.plants.library import disk_drive
+    >>> len(shaper_for(disk_drive(), "convolution")), len(shaper_for(disk_drive(), "simultaneous"))
+    (4, 3)
+    """
     plant = as_plant(plant)
     rigid_body(plant)
     modes = _flexible_modes(plant)
@@ -129,6 +151,12 @@ def design_settle(b: float, U: float, Ts: float, damping: float = 0.0, bandwidth
     |x_e|/x_enter + |v|/v_enter <= 1 is where the PD part stays within ``fill`` U (x_enter =
     fill U/kp, v_enter = fill U/kd); the loop returns to STOS outside ``exit_factor`` times it.
     ``bandwidth`` (rad/s) defaults to 0.1/Ts.
+
+    Examples
+    --------
+    >>> gains = design_settle(2700.0, 11.0, 1e-5)  # the disk drive's rigid body at 100 kHz
+    >>> gains["bandwidth"], round(gains["x_enter"] * gains["kp"] / 11.0, 12)  # x_enter = fill U / kp
+    (10000.0, 0.5)
     """
     b = check_positive(b, "b")
     U = check_positive(U, "U")
@@ -159,7 +187,15 @@ def design_settle(b: float, U: float, Ts: float, damping: float = 0.0, bandwidth
 class STOSLaw:
     """A STOS design: the shaper, the switching curves (``runtime.stos.stos_curves``) and the settle
     controller's parameters (None: the pure law of the paper). Serialises to JSON as the FMU's
-    parameter set."""
+    parameter set.
+
+    Examples
+    --------
+    >>> from shapefmu.plants.library import disk_drive
+    >>> law = stos_law(disk_drive())
+    >>> law.U, law.settle, law.to_dict()["kind"]
+    (11.0, None, 'stos')
+    """
 
     shaper: ImpulseShaper
     curves: dict
@@ -192,6 +228,13 @@ def stos_law(plant, shaper: ImpulseShaper | str = "simultaneous", Ts: float | No
     With ``Ts`` a settle controller for that sampling period is added (``design_settle``); its
     bandwidth defaults to a tenth of the lowest flexible mode, so that it barely excites the modes,
     and at most 0.2/Ts.
+
+    Examples
+    --------
+    >>> from shapefmu.plants.library import disk_drive
+    >>> law = stos_law(disk_drive(), "simultaneous", Ts=1e-5)
+    >>> len(law.shaper), round(law.shaper.duration * 1e6, 2), sorted(law.settle)[:3]  # 3 impulses over 400 us
+    (3, 400.02, ['Ts', 'bandwidth', 'kd'])
     """
     plant = as_plant(plant)
     b, damping = rigid_body(plant)
@@ -212,7 +255,14 @@ def stos_law(plant, shaper: ImpulseShaper | str = "simultaneous", Ts: float | No
 
 
 def step(time: float, value: float) -> Callable[[float], float]:
-    """A step disturbance: 0 before ``time``, ``value`` from then on (input units, e.g. V)."""
+    """A step disturbance: 0 before ``time``, ``value`` from then on (input units, e.g. V).
+
+    Examples
+    --------
+    >>> w = step(1e-3, 0.5)
+    >>> w(0.0), w(1e-3)
+    (0.0, 0.5)
+    """
     time, value = check_finite(time, "time"), check_finite(value, "value")
     return lambda t: value if t >= time else 0.0
 
@@ -224,7 +274,13 @@ class STOSMetrics:
     ``residual_vibration``: per flexible mode, max |x_fi| after the move (from the hand-over, or
     from the move time without settle controller); ``peak_u``: max |u|; ``chattering``: sign
     changes of u (|u| > 1e-3 U) in the last quarter of the run; ``final_error``: max |x_r - target|
-    over the last quarter, relative to |X|."""
+    over the last quarter, relative to |X|.
+
+    Examples
+    --------
+    >>> STOSMetrics(2.9e-3, 3e-3, (4.1e-6, 3.0e-6), 11.0, 0, 5.8e-6, 1e-3).peak_u
+    11.0
+    """
 
     move_time: float
     handover_time: float
@@ -239,7 +295,16 @@ class STOSMetrics:
 class STOSResult:
     """Sampled closed-loop run: ``t`` (N), states ``x`` (N x n; x_r, x_r', then x_f1, x_f1', ...),
     the held input ``u`` on [t_k, t_k + Ts), the ``target`` and ``disturbance`` at each sample,
-    and the ``metrics``."""
+    and the ``metrics``.
+
+    Examples
+    --------
+    >>> from shapefmu.plants.library import disk_drive
+    >>> plant = disk_drive()
+    >>> result = simulate_stos(plant, stos_law(plant, Ts=1e-5), 0.05, 1e-5, 0.012)
+    >>> result.x.shape, float(result.x_r[0]), round(float(result.x_r[-1]), 5)
+    ((1201, 6), 0.0, 0.05)
+    """
 
     t: np.ndarray
     x: np.ndarray
@@ -290,6 +355,14 @@ def simulate_stos(plant, law: STOSLaw, X: float, Ts: float, t_end: float,
     for inputs constant over the sample. ``disturbance(t)`` is an input-equivalent disturbance
     w (e.g. a torque step as the voltage that produces it), sampled and held like u.
     ``setpoint_changes`` holds (time, new target) pairs that the loop follows without re-design.
+
+    Examples
+    --------
+    >>> from shapefmu.plants.library import disk_drive
+    >>> plant = disk_drive()  # paper 002: 0.05 rad at |u| <= 11 V in 2.9 ms, modes left at ~4e-6
+    >>> m = simulate_stos(plant, stos_law(plant, Ts=1e-5), 0.05, 1e-5, 0.012).metrics
+    >>> round(m.move_time, 6), m.peak_u, max(m.residual_vibration) < 5e-6
+    (0.0029, 11.0, True)
     """
     plant = as_plant(plant)
     rigid_body(plant)
@@ -343,7 +416,19 @@ def _metrics(t, x, u, target, settling, U, distance, tolerance) -> STOSMetrics:
 
 def plot_stos(results: dict[str, STOSResult], path, plant=None) -> None:
     """One column per run (like Fig. 6 of paper 002): u, x_r, x_r', the modal deflections x_fi and
-    velocities x_fi' against time."""
+    velocities x_fi' against time.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from shapefmu.plants.library import disk_drive
+    >>> plant = disk_drive()
+    >>> result = simulate_stos(plant, stos_law(plant, Ts=1e-5), 0.05, 1e-5, 0.006)
+    >>> path = os.path.join(tempfile.mkdtemp(), "stos.png")
+    >>> plot_stos({"simultaneous": result}, path)
+    >>> os.path.getsize(path) > 0
+    True
+    """
     import matplotlib
 
     matplotlib.use("Agg")
@@ -378,7 +463,16 @@ def rigid_bang_bang_residual(plant, distance: float, Ts: float, window: float = 
                              u_max: float | None = None) -> tuple[float, tuple[float, ...]]:
     """(move time, per-mode max |x_fi|) of the unshaped rigid-body time-optimal bang-bang (eq. 2, or
     its back-EMF version from ``optimal.rigid_bang_bang``) on the full plant, simulated exactly and
-    read every ``Ts`` over ``window`` seconds after the command ends: the vibration STOS removes."""
+    read every ``Ts`` over ``window`` seconds after the command ends: the vibration STOS removes.
+
+    Examples
+    --------
+    >>> import math
+    >>> from shapefmu.plants.library import disk_drive
+    >>> T, residual = rigid_bang_bang_residual(disk_drive(), 0.05, 1e-5)
+    >>> math.isclose(T, 2 * math.sqrt(0.05 / (2700 * 11)))  # eq. 2: T = 2 sqrt(X / (b U))
+    True
+    """
     from shapefmu.optimal import rigid_bang_bang, simulate
 
     plant = as_plant(plant)
@@ -390,7 +484,13 @@ def rigid_bang_bang_residual(plant, distance: float, Ts: float, window: float = 
 
 def stos_report(path, distance: float, shaper: str = "simultaneous", Ts: float = 1e-6, t_end: float | None = None,
                 u_max: float | None = None, plot=None) -> str:
-    """The text of ``shapefmu stos FILE --distance X --shaper KIND [--ts TS] [--plot out.png]``."""
+    """The text of ``shapefmu stos FILE --distance X --shaper KIND [--ts TS] [--plot out.png]``.
+
+    Examples
+    --------
+    >>> print(stos_report("disk_drive", 0.05, Ts=1e-5).splitlines()[0])
+    STOS on plant disk_drive: move of 0.05 with |u| <= 11, Ts = 1e-05 s, simultaneous shaper of 3 impulses, length 0.000400021 s
+    """
     plant = as_plant(path)
     Ts = check_positive(Ts, "Ts")
     if t_end is not None:

@@ -16,7 +16,7 @@ def pythonfmu_fixture(model: str, start_values: dict):
     return fixture
 
 
-# --- Shaper FMU (fmi/python/slaves/shaper.py) -------------------------------------------------------------
+# --- Shaper FMU (fmi/kinds/shaper.py) -------------------------------------------------------------
 
 # A ZV shaper for 10 Hz sampled at 1 ms: its impulses (0 and 50 ms) lie on the grid, so the FMU's
 # sampled output equals the continuous-time shaping of a held command exactly.
@@ -45,7 +45,7 @@ def command_signal(n):
     return [math.sin(0.05 * k) + (1.0 if 20 <= k < 60 else 0.0) for k in range(n)]
 
 
-# --- ProfileGenerator, EKFTuner, ReferencePlayer, STOSController FMUs (fmi/python/slaves/*) -------------
+# --- ProfileGenerator, EKFTuner, ReferencePlayer, STOSController FMUs (fmi/kinds/*) -------------
 
 # Paper 003's ten-pendula move (M-BC:TZ:TP, 3.5 rad/s, 1.7 m at 0.7 m/s), its kernel at 1 ms.
 PROFILE_STARTS = {"profile": "M-BC:TZ:TP", "omega_n": 3.5, "distance": 1.7, "speed": 0.7, "attenuation": 0.05,
@@ -93,7 +93,7 @@ def reference_fmu(tmp_path_factory, time_optimal_solution):
     return out
 
 
-# --- ShapeFilter FMU (fmi/python/slaves/shape_filter.py) ------------------------------------------------
+# --- ShapeFilter FMU (fmi/kinds/shape_filter.py) ------------------------------------------------
 
 # The mode for which Ts = 1 ms makes every window length whole: f_d = f sqrt(1 - zeta^2) = 10 Hz, so
 # M = 1 / (f_d Ts) = 100 (rectangle), 200 (Hanning, Hamming), 300 (Blackman); zeta exercises the

@@ -8,9 +8,8 @@ import pytest
 
 from support import MODELS
 # The linear plants of models/*.toml, by model name.
-LINEAR_PLANTS = ("disk_drive", "disk_drive_back_emf", "linear_synchronous_motor", "ten_pendula", "mass_spring_chain")
-# The plants whose modes move with a scheduling input (built at its start value until their FMUs take it).
-SCHEDULED_PLANTS = ("printer_bed", "gantry_crane")
+LINEAR_PLANTS = ("disk_drive", "disk_drive_back_emf", "linear_synchronous_motor", "ten_pendula", "mass_spring_chain",
+                 "printer_bed", "gantry_crane")
 
 
 @pytest.fixture(scope="session")

@@ -13,8 +13,8 @@ import sys
 from pathlib import Path
 
 
-def parse_mode(text: str) -> tuple[float, float]:
-    """``"2000"`` or ``"2000:0.01"`` (Hz, damping ratio) -> (omega rad/s, zeta)."""
+def parse_mode_hz(text: str) -> tuple[float, float]:
+    """``"2000"`` or ``"2000:0.01"`` -> (f Hz, zeta), as an FMU's f[i] and zeta[i] take them."""
     hz_text, _, zeta_text = text.partition(":")
     try:
         hz = float(hz_text)
@@ -25,6 +25,12 @@ def parse_mode(text: str) -> tuple[float, float]:
         raise argparse.ArgumentTypeError(f"--mode frequency must be > 0 Hz, got {hz_text!r}")
     if not (math.isfinite(zeta) and 0 <= zeta < 1):
         raise argparse.ArgumentTypeError(f"--mode damping ratio must be in [0, 1), got {zeta_text!r}")
+    return hz, zeta
+
+
+def parse_mode(text: str) -> tuple[float, float]:
+    """``"2000"`` or ``"2000:0.01"`` (Hz, damping ratio) -> (omega rad/s, zeta), as the Python API takes them."""
+    hz, zeta = parse_mode_hz(text)
     return 2.0 * math.pi * hz, zeta
 
 
@@ -140,7 +146,7 @@ def add_experiment_arguments(parser: argparse.ArgumentParser) -> None:
 
 def experiment(system, args) -> tuple[float, float]:
     """(stop time, step) of a run: ``--stop`` and ``--step``, else the system's own."""
-    from shapefmu.fmi.ssp_targets import written_step
+    from shapefmu.fmi.ssp.targets import written_step
 
     stop = args.stop if args.stop is not None else system.stop_time
     step = args.step if args.step is not None else written_step(system)

@@ -4,7 +4,7 @@
     shapefmu build shaper --kind simultaneous --mode 2000:0.01 --mode 3000:0.01 [--ts S] -o fmus/DiskDriveShaper.fmu
     shapefmu build reference solution.json [--interpolation hold|linear] -o fmus/TimeOptimal.fmu
     shapefmu build shape-filter --kind hanning --mode 10:0.05 --order 2 [--ts S] -o fmus/HanningFilter.fmu
-    shapefmu build ekf-tuner [--kind zvd] [--omega0 RAD_S] [--ts S] [--amplitude A] [--retune-fraction F] -o ...
+    shapefmu build ekf-tuner [--kind zvd] [--f0 HZ | --omega0 RAD_S] [--ts S] [--amplitude A] [--retune-fraction F] -o ...
     shapefmu build stos-controller [--param NAME=VALUE ...] -o ...; shapefmu build profile [--param ...] -o ...
         (any parameter of the FMU, typed as the FMU declares it, e.g. --param kind=zvd --param f[1]=40)
     shapefmu build shaper --native ...; shape-filter --native; ekf-tuner --native; build --native (every
@@ -21,7 +21,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from shapefmu.cli.arguments import examples, output_file, output_folder, parse_mode
+from shapefmu.cli.arguments import examples, output_file, output_folder, parse_mode_hz
 from shapefmu.cli.progress import reporter
 
 
@@ -57,7 +57,7 @@ def _measured_plants(out, fmi_version, progress) -> list[Path]:
     from the shipped model of that plant: ``shapefmu simulate NAME`` then works after ``build``."""
     from xml.etree import ElementTree as ET
 
-    from shapefmu.cosim.compare import measured_plant
+    from shapefmu.compare import measured_plant
     from shapefmu.fmi.native import build_plant_fmu, fmu_file_name
     from shapefmu.plants import as_plant
     from shapefmu.plants.shipped import SYSTEM_SUFFIXES, shipped
@@ -113,11 +113,11 @@ def _builder(args):
 
 
 def _add_shaper(parser):
-    from shapefmu.fmi.python.slaves.shaper import KINDS, MAX_MODES
+    from shapefmu.fmi.kinds.shaper import KINDS, MAX_MODES
 
     _add_native(parser)
     parser.add_argument("--kind", choices=KINDS, default="zvd", help="shaper design (default zvd)")
-    parser.add_argument("--mode", type=parse_mode, action="append", required=True, metavar="HZ[:ZETA]",
+    parser.add_argument("--mode", type=parse_mode_hz, action="append", required=True, metavar="HZ[:ZETA]",
                         help=f"mode frequency in Hz and damping ratio; up to {MAX_MODES}")
     parser.add_argument("--n", type=int, default=1, help="derivative order of zv_dn (default 1)")
     parser.add_argument("--vtol", type=float, default=0.05, help="tolerable vibration (default 0.05)")
@@ -129,17 +129,14 @@ def _add_shaper(parser):
 
 
 def _build_shaper(args):
-    from shapefmu.fmi.python.slaves.shaper import MAX_MODES
-    from shapefmu.shapers.catalog import check_sampling
+    from shapefmu.fmi.kinds.shaper import MAX_MODES, mode_start_values
+    from shapefmu.shapers.catalog import check_sampling, default_sampling_period
 
     if len(args.mode) > MAX_MODES:
         raise ValueError(f"--mode may be given at most {MAX_MODES} times, got {len(args.mode)}")
-    starts = {"kind": args.kind, "n": args.n, "vtol": args.vtol, "n_modes": len(args.mode)}
-    for i, (omega, zeta) in enumerate(args.mode, start=1):
-        starts[f"f[{i}]"] = omega / (2.0 * math.pi)
-        starts[f"zeta[{i}]"] = zeta
-    starts["Ts"] = args.ts if args.ts is not None else 2.0 * math.pi / max(w for w, _ in args.mode) / 100.0
-    check_sampling(args.mode, starts["Ts"], allow_aliasing=args.allow_aliasing)
+    starts = {"kind": args.kind, "n": args.n, "vtol": args.vtol, **mode_start_values(args.mode)}
+    starts["Ts"] = args.ts if args.ts is not None else default_sampling_period(f for f, _ in args.mode)
+    check_sampling([(2.0 * math.pi * f, zeta) for f, zeta in args.mode], starts["Ts"], allow_aliasing=args.allow_aliasing)
     return [_builder(args)("Shaper", Path(args.out), **starts)]
 
 
@@ -170,29 +167,24 @@ def _build_reference(args):
 
 
 def _add_shape_filter(parser):
-    from shapefmu.fmi.python.slaves.shape_filter import BASES, KINDS as FILTER_KINDS
+    from shapefmu.fmi.kinds.shape_filter import BASES, KINDS as FILTER_KINDS
 
     _add_native(parser)
     parser.add_argument("--kind", choices=FILTER_KINDS, default="hanning", help="filter design (default hanning)")
-    parser.add_argument("--mode", type=parse_mode, required=True, metavar="HZ[:ZETA]",
+    parser.add_argument("--mode", type=parse_mode_hz, required=True, metavar="HZ[:ZETA]",
                         help="mode frequency in Hz and damping ratio (damping: window filters only)")
-    parser.add_argument("--order", type=int, help="robustness order n of a window filter (default 1)")
-    parser.add_argument("--ts", type=float, help="filter sampling period in s (default 1e-3)")
     parser.add_argument("--adjust-ts", action="store_true", help="window filters: use the nearest Ts that makes M whole")
-    parser.add_argument("--c", type=float, help="three-hanning side weight C (default 0.25)")
     parser.add_argument("--base", choices=BASES, help="base window of differenced / convolved (default hanning)")
-    parser.add_argument("--delta-f", type=float, help="null mis-alignment of the M- twin-pulse kinds, Hz")
-    parser.add_argument("--null", type=int, help="TP:BC twin-pulse null index k (default 2)")
-    parser.add_argument("--move-time", type=float, help="time-frequency move time, a whole number of Ts (default 0.1 s)")
+    _parameter_options(parser, "ShapeFilter", {"--order": "order", "--ts": "Ts", "--c": "c", "--delta-f": "delta_f",
+                                               "--null": "null", "--move-time": "move_time"})
     parser.add_argument("-o", "--out", default="fmus/ShapeFilter.fmu", type=output_file(".fmu", what="FMU"),
                         help="FMU file (default fmus/ShapeFilter.fmu)")
 
 
 def _build_shape_filter(args):
-    omega, zeta = args.mode
-    starts = {"kind": args.kind, "f": omega / (2.0 * math.pi), "zeta": zeta, "adjust_Ts": args.adjust_ts,
-              **_given(order=args.order, Ts=args.ts, c=args.c, base=args.base, delta_f=args.delta_f, null=args.null,
-                       move_time=args.move_time)}
+    f, zeta = args.mode
+    starts = {"kind": args.kind, "f": f, "zeta": zeta, "adjust_Ts": args.adjust_ts,
+              **_given(args, "base", "order", "Ts", "c", "delta_f", "null", "move_time")}
     return [_builder(args)("ShapeFilter", Path(args.out), **starts)]
 
 
@@ -201,31 +193,48 @@ def _add_ekf_tuner(parser):
 
     _add_native(parser)
     parser.add_argument("--kind", choices=TUNER_KINDS, default="zvd", help="shaper designed for the estimate (default zvd)")
-    parser.add_argument("--n", type=int, help="derivative order of zv_dn (default 1)")
-    parser.add_argument("--omega0", type=float, help="first guess of the vibration's frequency, rad/s (default 2 pi 10)")
-    parser.add_argument("--ts", type=float, help="sampling period of the EKF and the shaper, s (default 1e-3)")
-    parser.add_argument("--amplitude", type=float, help="scale of the vibration signal (default 1)")
-    parser.add_argument("--retune-fraction", type=float, help="re-design when the estimate moves by more (default 0.05)")
+    group = parser.add_mutually_exclusive_group()
+    group.add_argument("--f0", type=float, metavar="HZ", help="first guess of the vibration's frequency, Hz (default 10)")
+    _parameter_options(group, "EKFTuner", {"--omega0": "omega0"})
+    _parameter_options(parser, "EKFTuner", {"--n": "n", "--ts": "Ts", "--amplitude": "amplitude",
+                                            "--retune-fraction": "retune_fraction"})
     parser.add_argument("-o", "--out", default="fmus/EKFTuner.fmu", type=output_file(".fmu", what="FMU"),
                         help="FMU file (default fmus/EKFTuner.fmu)")
 
 
 def _build_ekf_tuner(args):
-    starts = _given(kind=args.kind, n=args.n, omega0=args.omega0, Ts=args.ts, amplitude=args.amplitude,
-                    retune_fraction=args.retune_fraction)
+    if args.f0 is not None:  # the command line's frequencies are in Hz; the parameter's name says rad/s
+        args.omega0 = 2.0 * math.pi * args.f0
+    starts = _given(args, "kind", "n", "omega0", "Ts", "amplitude", "retune_fraction")
     return [_builder(args)("EKFTuner", Path(args.out), **starts)]
 
 
-def _given(**options) -> dict:
-    """The options the user gave (not None): the FMU's own start values stand for the others."""
-    return {name: value for name, value in options.items() if value is not None}
+def _given(args, *names) -> dict:
+    """The parameters ``names`` the user gave (not None): the FMU's own start values stand for the others."""
+    return {name: getattr(args, name) for name in names if getattr(args, name) is not None}
+
+
+_OPTION_TYPES = {"Real": float, "Integer": int, "String": str}
+
+
+def _parameter_options(parser, kind: str, options: dict) -> None:
+    """One option per parameter of the FMU ``kind`` (option -> parameter), typed, described and with
+    the default the FMU declares; its value lands in ``args.<parameter>``."""
+    from shapefmu.fmi.kinds import kind as kind_module
+
+    interface = kind_module(kind).INTERFACE
+    for option, name in options.items():
+        variable = interface.variable(name)
+        unit = f" {variable.unit}" if variable.type == "Real" and variable.unit != "1" else ""
+        parser.add_argument(option, dest=name, type=_OPTION_TYPES[variable.type],
+                            help=f"{variable.description} (default {variable.start:g}{unit})")
 
 
 def _parameters(name: str, items) -> dict:
     """--param NAME=VALUE items as the FMU ``name``'s start values, typed as it declares them."""
-    from shapefmu.fmi.python.builder import slave_class
+    from shapefmu.fmi.kinds import kind
 
-    declared = {v.name: v for v in slave_class(name)(instance_name="cli").variables if v.causality == "parameter"}
+    declared = {v.name: v for v in kind(name).INTERFACE.variables if v.causality == "parameter"}
     starts = {}
     for item in items:
         key, sep, text = item.partition("=")
@@ -267,7 +276,7 @@ TARGETS = {
     "shape-filter": ("the ShapeFilter FMU with a sampled design baked in", _add_shape_filter, _build_shape_filter,
                      ("shapefmu build shape-filter --kind hanning --mode 10:0.05 --order 2 -o fmus/Hanning.fmu",)),
     "ekf-tuner": ("the EKFTuner FMU (paper 001): estimates the vibration's mode, shapes for it", _add_ekf_tuner,
-                  _build_ekf_tuner, ("shapefmu build ekf-tuner --kind zvd --omega0 62.8 --ts 1e-3 -o fmus/EKFTuner.fmu",)),
+                  _build_ekf_tuner, ("shapefmu build ekf-tuner --kind zvd --f0 10 --ts 1e-3 -o fmus/EKFTuner.fmu",)),
     "stos-controller": ("the STOSController FMU (paper 002): shaped time-optimal closed loop",
                         *_parameter_target("STOSController", "STOSController"),
                         ("shapefmu build stos-controller --native --param kind=zvd --param f[1]=40 "

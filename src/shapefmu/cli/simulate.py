@@ -155,7 +155,7 @@ def _print_fmu_warnings(master) -> None:
 
 
 def _cmd_compare(args) -> int:
-    from shapefmu.cosim.compare import compare
+    from shapefmu.compare import compare
 
     if args.target is not None and args.write_ssp is None:
         raise ValueError("--target applies to --write-ssp FILE, which is not given")
@@ -172,7 +172,7 @@ def _cmd_compare(args) -> int:
 
 
 def _add_write_ssp(parser, fold: bool) -> None:
-    from shapefmu.fmi.ssp_targets import TARGETS
+    from shapefmu.fmi.ssp.targets import TARGETS
 
     parser.add_argument("--write-ssp", metavar="FILE", type=output_file(".ssp", ".ssd", what="SSP file"),
                         help="also write the system run, with its experiment: .ssp (FMUs inside) or .ssd")
@@ -217,7 +217,7 @@ def _simulate_arguments(p) -> None:
 
 
 def _compare_arguments(p) -> None:
-    from shapefmu.cosim.compare import CANDIDATES
+    from shapefmu.compare import CANDIDATES
 
     p.add_argument("file", help="plant model in the form of eq. (1) of paper 002: a model file or a shipped name "
                    "(disk_drive)")

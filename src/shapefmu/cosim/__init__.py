@@ -3,7 +3,7 @@
 ``Master(system_or_path, step, ...)`` runs a :class:`shapefmu.fmi.ssp.System` (or an .ssp/.ssd
 file) by fixed macro steps (Gauss-Seidel or Jacobi), integrates Model Exchange FMUs itself, solves
 algebraic loops with FMU state rollback and records chosen variables; see :mod:`.master`.
-It may import ``shapefmu.fmi`` and the layers below (``compare`` uses the design layer), never
+It may import ``shapefmu.fmi`` and the layers below, never ``compare`` (the experiments that run it),
 ``sweep`` or ``cli``.
 """
 

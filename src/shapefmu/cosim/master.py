@@ -41,7 +41,7 @@ Communication semantics (``t_k = t0 + k*h``; the last step is shortened to end e
   typed column per recorded variable.
 * FMI 3.0 arrays (1-D) travel element by element: a connection of two arrays of one size joins
   element i to element i, and ``name[i]`` (1-based) names one element, which connects to a scalar or
-  another element (:mod:`shapefmu.fmi.ssp_connectors`). A parameter sets a whole array from a
+  another element (:mod:`shapefmu.fmi.ssp.connectors`). A parameter sets a whole array from a
   sequence or the text ``"[1, 2, 3]"`` of the array's size, or one element as ``"comp.k[2]"``; the
   other elements keep their start values (or the SSP bindings' values). A recorded array has a
   column per element, ``comp.y[1]`` ... ``comp.y[n]``.

@@ -122,6 +122,20 @@ def _condition(guard: Guard, python: bool) -> str | None:
     return both.join(parts) or None
 
 
+def _guarded(blocks, statement, python: bool) -> list[str]:
+    """The loop body's lines: every block's statements under its guard (an ``if`` in Python or in C)."""
+    lines = []
+    for guard, body in blocks:
+        condition = _condition(guard, python=python)
+        indent = "        " if condition is None else "            "
+        if condition is not None:
+            lines.append(f"        if {condition}:" if python else f"        if ({condition}) {{")
+        lines += [indent + line for op in body for line in statement(op)]
+        if condition is not None and not python:
+            lines.append("        }")
+    return lines
+
+
 def _value(op, python: bool) -> str:
     """The right-hand side of an input statement."""
     _, i, f, d, early, j, g, s, factor, offset = op
@@ -177,12 +191,7 @@ def python_chunk(master, blocks):
              "    for k in range(k0, k1):",
              "        t = t0 + k * h",
              "        dt = h if k != last else t_stop - t"]
-    for guard, body in blocks:
-        condition = _condition(guard, python=True)
-        indent = "        " if condition is None else "            "
-        if condition is not None:
-            lines.append(f"        if {condition}:")
-        lines += [indent + line for op in body for line in statement(op)]
+    lines += _guarded(blocks, statement, python=True)
     index = {u.name: i for i, u in enumerate(master.units)}
     recorded = ", ".join(f"(ov{index[c]}_{f}[{s}] or b'').decode(errors='replace')" if f == "String" else f"ov{index[c]}_{f}[{s}]"
                          for c, f, s in master._record_sources)
@@ -406,14 +415,7 @@ def _c_source(master, blocks, names, dtype) -> tuple[str, list[str]]:
              "        double t = t0 + (double)k * h;",
              "        double dt = k != last ? h : t_stop - t;",
              "        int stop = 0;"]
-    for guard, body in blocks:
-        condition = _condition(guard, python=False)
-        indent = "        " if condition is None else "            "
-        if condition is not None:
-            lines.append(f"        if ({condition}) {{")
-        lines += [indent + line for op in body for line in statement(op)]
-        if condition is not None:
-            lines.append("        }")
+    lines += _guarded(blocks, statement, python=False)
     lines += ["        if (stop) { *stop_step = k; return row; }",
               "        if ((k + 1) % every == 0 || k == last) {",
               f"            char *record = buf + row * {dtype.itemsize}L;",

@@ -120,6 +120,7 @@ class Unit:
     """A Co-Simulation FMU instance (Model Exchange: see :class:`ModelExchangeUnit`)."""
 
     interface = "CoSimulation"
+    fmu_class = FMU2Slave  # fmpy's class of the instance
     fmi3 = False
     prefix = "fmi2"
     real = "Real"  # the family of floating-point variables, which the fast paths move
@@ -129,11 +130,7 @@ class Unit:
     queues = _MESSAGE_QUEUES  # where the process-wide logger finds this unit's messages
 
     def __init__(self, name: str, fmu_path: Path, unzip_directory: str, description):
-        self.name = name
-        self.fmu_path = Path(fmu_path)
-        self.description = description
-        self.variables = {v.name: v for v in description.modelVariables}
-        self.messages: collections.deque[str] = collections.deque(maxlen=20)
+        self._name_it(name, fmu_path, description)
         self._callbacks = self._make_callbacks()
         self.fmu = self._make_fmu(unzip_directory)
         self.fmu.instantiate(callbacks=self._callbacks, loggingOn=False)
@@ -149,12 +146,21 @@ class Unit:
         self.configure([], [])
 
     # ----------------------------------------------------------------------------- set-up
+    def _name_it(self, name: str, fmu_path: Path, description) -> None:
+        """The unit's name, FMU file, description, variables by name and the queue of its messages."""
+        self.name = name
+        self.fmu_path = Path(fmu_path)
+        self.description = description
+        self.variables = {v.name: v for v in description.modelVariables}
+        self.messages: collections.deque[str] = collections.deque(maxlen=20)
+
     def _make_fmu(self, unzip_directory):
-        return FMU2Slave(guid=self.description.guid, unzipDirectory=unzip_directory,
-                         modelIdentifier=self.description.coSimulation.modelIdentifier, instanceName=self.name)
+        return self.fmu_class(guid=self.description.guid, unzipDirectory=unzip_directory,
+                              modelIdentifier=self._capabilities().modelIdentifier, instanceName=self.name)
 
     def _capabilities(self):
-        return self.description.coSimulation
+        """The description of the interface this unit runs (fmpy's coSimulation or modelExchange)."""
+        return getattr(self.description, "modelExchange" if self.interface == "ModelExchange" else "coSimulation")
 
     def _make_callbacks(self):
         callbacks = fmi2CallbackFunctions()
@@ -407,13 +413,7 @@ class ModelExchangeUnit(Unit):
     """A Model Exchange FMU integrated by the master with CVode (see the module docstring)."""
 
     interface = "ModelExchange"
-
-    def _make_fmu(self, unzip_directory):
-        return FMU2Model(guid=self.description.guid, unzipDirectory=unzip_directory,
-                         modelIdentifier=self.description.modelExchange.modelIdentifier, instanceName=self.name)
-
-    def _capabilities(self):
-        return self.description.modelExchange
+    fmu_class = FMU2Model
 
     def configure(self, inputs, reads):
         super().configure(inputs, reads)

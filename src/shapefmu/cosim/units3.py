@@ -51,6 +51,7 @@ _NO_INTERMEDIATE_UPDATE = fmi3IntermediateUpdateCallback()
 class Unit3(Unit):
     """An FMI 3.0 Co-Simulation FMU instance."""
 
+    fmu_class = FMU3Slave
     fmi3 = True
     prefix = "fmi3"
     real = "Float64"
@@ -59,11 +60,7 @@ class Unit3(Unit):
     queues = _QUEUES
 
     def __init__(self, name: str, fmu_path: Path, unzip_directory: str, description):
-        self.name = name
-        self.fmu_path = Path(fmu_path)
-        self.description = description
-        self.variables = {v.name: v for v in description.modelVariables}
-        self.messages: collections.deque[str] = collections.deque(maxlen=20)
+        self._name_it(name, fmu_path, description)
         _QUEUES[id(self.messages)] = self.messages
         self.clocks = input_clocks(self.name, self.fmu_path, Path(unzip_directory))
         self.fmu = self._make_fmu(unzip_directory)
@@ -81,10 +78,6 @@ class Unit3(Unit):
         self._state = c_void_p()
         self._start_time = 0.0
         self.configure([], [])
-
-    def _make_fmu(self, unzip_directory):
-        return FMU3Slave(guid=self.description.guid, unzipDirectory=unzip_directory,
-                         modelIdentifier=self.description.coSimulation.modelIdentifier, instanceName=self.name)
 
     def _instantiate(self):
         resources = str(Path(self.fmu.unzipDirectory) / "resources") + "/"  # FMI 3.0: a path, not a URI
@@ -202,13 +195,7 @@ class ModelExchangeUnit3(ModelExchangeUnit, Unit3):
     """An FMI 3.0 Model Exchange FMU, integrated by the master as an FMI 2.0 one is."""
 
     interface = "ModelExchange"
-
-    def _make_fmu(self, unzip_directory):
-        return FMU3Model(guid=self.description.guid, unzipDirectory=unzip_directory,
-                         modelIdentifier=self.description.modelExchange.modelIdentifier, instanceName=self.name)
-
-    def _capabilities(self):
-        return self.description.modelExchange
+    fmu_class = FMU3Model
 
     def _instantiate(self):
         resources = str(Path(self.fmu.unzipDirectory) / "resources") + "/"  # FMI 3.0: a path, not a URI

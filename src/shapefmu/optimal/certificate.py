@@ -35,6 +35,11 @@ class OptimalityCheck:
     by weak duality every input that reaches x_f at T' needs a peak at least this, so a value above
     u_max proves that no move is that much shorter. ``lp_peak_at_shorter`` is the least peak of a
     grid input (``n_intervals`` steps, LP) reaching x_f at T', above u_max when the grid is infeasible.
+
+    Examples
+    --------
+    >>> OptimalityCheck((1.0, 0.0), 0.0, 0.01, 1e-4, 1.0002, 1.0001, 1.0, 200).time_optimal
+    True
     """
 
     costate: tuple[float, ...]
@@ -75,6 +80,15 @@ def check_optimality(plant, solution: TimeOptimalSolution, shorter: float = 1e-4
     for closely spaced modes the costate's modal components are ~1e12 times its rigid-body ones and
     cancel in sigma, which double precision would leave with no correct digit.
     ``n_intervals`` defaults to 100 per state for the grid LP at T (1 - ``shorter``).
+
+    Examples
+    --------
+    >>> from shapefmu.plants.library import rigid_flexible
+    >>> plant = rigid_flexible(1.0, u_max=1.0)  # x'' = u, |u| <= 1: T = 2 sqrt(X / (b U)) = 2 for X = 1
+    >>> from shapefmu.optimal import time_optimal
+    >>> check = check_optimality(plant, time_optimal(plant, 1.0))
+    >>> check.time_optimal, check.sign_margin > 0.0
+    (True, True)
     """
     plant = as_plant(plant)
     shorter = check_positive(shorter, "shorter")

@@ -21,7 +21,15 @@ from shapefmu.plants import as_plant, rigid_part
 
 @dataclass(frozen=True)
 class Move:
-    """One move of a comparison: its command, length, residual vibration and peak input."""
+    """One move of a comparison: its command, length, residual vibration and peak input.
+
+    Examples
+    --------
+    >>> from shapefmu.optimal.moves import Command
+    >>> move = Move("rigid bang-bang", Command((0.0, 1.0, 2.0), (1.0, -1.0)), 2.0, 0.09, 1.0)
+    >>> move.duration / move.command.duration
+    1.0
+    """
 
     name: str
     command: Command
@@ -32,6 +40,20 @@ class Move:
 
 @dataclass(frozen=True)
 class MoveComparison:
+    """Every move of ``compare_moves`` beside the time-optimal one, printed by ``table``.
+
+    Examples
+    --------
+    >>> import math
+    >>> from shapefmu.plants.library import rigid_flexible
+    >>> plant = rigid_flexible(1.0, [(2 * math.pi * 0.75, 0.0, -1.0)], u_max=1.0)  # a rigid body and a 0.75 Hz mode
+    >>> comparison = compare_moves(plant, 1.0)
+    >>> [(move.name, round(move.duration, 6)) for move in comparison.moves]
+    [('rigid bang-bang', 2.0), ('bang-bang * convolution (ZV per mode)', 2.666667), ('bang-bang * simultaneous', 2.666667), ('time-optimal', 2.077786)]
+    >>> print(comparison.table().splitlines()[2])
+    rigid bang-bang                                    2     0.96256   9.006e-02          1
+    """
+
     plant: str
     distance: float
     u_max: float
@@ -50,7 +72,15 @@ class MoveComparison:
 
 def rigid_bang_bang(plant, distance: float, u_max: float | None = None, output=0) -> Command:
     """The time-optimal bang-bang of the plant's rigid part alone (paper 002, eq. 2 for b2/s^2):
-    the unshaped command that the shapers are convolved with."""
+    the unshaped command that the shapers are convolved with.
+
+    Examples
+    --------
+    >>> from shapefmu.plants.library import rigid_flexible
+    >>> plant = rigid_flexible(1.0, u_max=1.0)  # x'' = u, |u| <= 1: T = 2 sqrt(X / (b U)) = 2 for X = 1
+    >>> rigid_bang_bang(plant, 1.0)
+    Command(breaks=(0.0, 1.0, 2.0), levels=(1.0, -1.0), final=0.0)
+    """
     plant = as_plant(plant)
     rigid = time_optimal(rigid_part(plant), distance, _u_max(plant, u_max), output, n_intervals=40, n_samples=2)
     return rigid.command
@@ -64,6 +94,15 @@ def compare_moves(plant, distance: float, u_max: float | None = None, shapers=No
     ``shapers`` maps a name to an ``ImpulseShaper``; by default the convolution (ZV per mode) and
     simultaneous shapers of paper 002 (Sec. II) for the plant's oscillatory modes. ``progress``, a
     function of one line of text, is told as each phase begins.
+
+    Examples
+    --------
+    >>> import math
+    >>> from shapefmu.plants.library import rigid_flexible
+    >>> plant = rigid_flexible(1.0, [(2 * math.pi * 0.75, 0.0, -1.0)], u_max=1.0)  # a rigid body and a 0.75 Hz mode
+    >>> comparison = compare_moves(plant, 1.0)  # the shaped moves rest, the rigid bang-bang does not
+    >>> [move.residual < 1e-12 for move in comparison.moves], round(comparison.optimal.T, 7)
+    ([False, True, True, True], 2.0777864)
     """
     from shapefmu.shapers import convolve_modes, simultaneous
 
@@ -89,7 +128,19 @@ def compare_moves(plant, distance: float, u_max: float | None = None, shapers=No
 
 def plot_comparison(comparison: MoveComparison, plant, path) -> None:
     """Save u(t) of every move (top), the moved output (middle) and the other outputs, the modal
-    deflections for the plants of paper 002 (bottom), under the time-optimal move, to ``path``."""
+    deflections for the plants of paper 002 (bottom), under the time-optimal move, to ``path``.
+
+    Examples
+    --------
+    >>> import math
+    >>> from shapefmu.plants.library import rigid_flexible
+    >>> plant = rigid_flexible(1.0, [(2 * math.pi * 0.75, 0.0, -1.0)], u_max=1.0)  # a rigid body and a 0.75 Hz mode
+    >>> import os, tempfile
+    >>> path = os.path.join(tempfile.mkdtemp(), "moves.png")
+    >>> plot_comparison(compare_moves(plant, 1.0), plant, path)
+    >>> os.path.getsize(path) > 0
+    True
+    """
     import matplotlib
 
     matplotlib.use("Agg")
@@ -125,7 +176,16 @@ def optimal_report(path, distance: float, u_max: float | None = None, plot=None,
                    csv_path=None, progress=None) -> str:
     """The text of ``shapefmu optimal FILE --distance X [--u-max U] [--plot out.png] [--json s.json]
     [--csv u.csv]``; the JSON and CSV files are the solution's ``to_json`` and ``to_csv``, which
-    ``shapefmu build reference`` plays back; ``progress`` as in :func:`compare_moves`."""
+    ``shapefmu build reference`` plays back; ``progress`` as in :func:`compare_moves`.
+
+    Examples
+    --------
+    >>> import math
+    >>> from shapefmu.plants.library import rigid_flexible
+    >>> plant = rigid_flexible(1.0, [(2 * math.pi * 0.75, 0.0, -1.0)], u_max=1.0)  # a rigid body and a 0.75 Hz mode
+    >>> print(optimal_report(plant, 1.0).splitlines()[0])
+    plant rigid_flexible: move of 1 with |u| <= 1
+    """
     plant = as_plant(path)
     comparison = compare_moves(plant, distance, u_max, progress=progress)
     optimal = comparison.optimal

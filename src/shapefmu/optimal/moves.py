@@ -20,7 +20,14 @@ from shapefmu.runtime.checks import check_positive
 @dataclass(frozen=True)
 class Command:
     """A piecewise-constant input: ``levels[k]`` on [breaks[k], breaks[k+1]), then ``final`` for
-    t >= breaks[-1] (0 for a plant with a rigid body, the holding input otherwise)."""
+    t >= breaks[-1] (0 for a plant with a rigid body, the holding input otherwise).
+
+    Examples
+    --------
+    >>> bang_bang = Command((0.0, 1.0, 2.0), (1.0, -1.0))
+    >>> bang_bang.duration, bang_bang.peak, bang_bang([0.5, 1.0, 3.0]).tolist()  # right-continuous
+    (2.0, 1.0, [1.0, -1.0, 0.0])
+    """
 
     breaks: tuple[float, ...]
     levels: tuple[float, ...]
@@ -87,6 +94,13 @@ def simulate(plant, command: Command, t=None, x0=None):
     Returns the states at the command's breaks (shape (len(breaks), n)), and, if ``t`` is given
     (sorted, >= the first break), also at the times ``t`` (shape (len(t), n)). The single input is
     the plant's first input; after the last break it is ``command.final``.
+
+    Examples
+    --------
+    >>> from shapefmu.plants.library import rigid_flexible
+    >>> plant = rigid_flexible(1.0, u_max=1.0)  # x'' = u, |u| <= 1: T = 2 sqrt(X / (b U)) = 2 for X = 1
+    >>> simulate(plant, Command((0.0, 1.0, 2.0), (1.0, -1.0)))[-1].tolist()  # at rest at x = 1
+    [1.0, 0.0]
     """
     plant = as_plant(plant)
     A, B = plant.A, plant.B[:, :1]
@@ -150,6 +164,14 @@ def rest_state(plant: Plant, distance: float, output=0) -> tuple[np.ndarray, flo
     For a plant with a rigid body u_f = 0; for a plant without an integrator (the closed-loop LSM
     of paper 001, eq. 33) the input has to be held at u_f = distance / G(0) after the move.
     Raises ValueError if no such rest state exists or it is not unique.
+
+    Examples
+    --------
+    >>> from shapefmu.plants.library import rigid_flexible
+    >>> plant = rigid_flexible(1.0, u_max=1.0)  # x'' = u, |u| <= 1: T = 2 sqrt(X / (b U)) = 2 for X = 1
+    >>> x_f, u_f = rest_state(plant, 1.0)
+    >>> x_f.tolist(), u_f
+    ([1.0, 0.0], 0.0)
     """
     j = _output_index(plant, output)
     n = plant.n_states
@@ -167,7 +189,16 @@ def rest_state(plant: Plant, distance: float, output=0) -> tuple[np.ndarray, flo
 
 
 def check_controllable(plant: Plant) -> None:
-    """PBH test: rank [A - lambda I, B] = n at every eigenvalue, else ValueError naming the mode."""
+    """PBH test: rank [A - lambda I, B] = n at every eigenvalue, else ValueError naming the mode.
+
+    Examples
+    --------
+    >>> from shapefmu.plants.library import rigid_flexible
+    >>> check_controllable(rigid_flexible(1.0, [(1.0, 0.0, 0.0)]))  # b4 = 0: the mode is not driven
+    Traceback (most recent call last):
+    ...
+    ValueError: plant 'rigid_flexible' is not controllable: the mode at s = 0+1j cannot be moved by input 'u', so a rest-to-rest move cannot be planned
+    """
     # Balance first (diagonal similarity): companion forms with entries from 1 to 1e8 would
     # otherwise make a controllable mode look uncontrollable at any fixed tolerance.
     _, (d, _) = matrix_balance(plant.A, permute=False, separate=True)
@@ -195,6 +226,15 @@ def residual_after_move(plant, command: Command, distance: float, output=0) -> f
     period of the slowest oscillatory mode (the free response from the exact final state is
     evaluated at 400 points of that window), divided by |distance|. A move that ends exactly at
     rest has residual 0.
+
+    Examples
+    --------
+    >>> import math
+    >>> from shapefmu.plants.library import rigid_flexible
+    >>> plant = rigid_flexible(1.0, [(2 * math.pi * 0.75, 0.0, -1.0)], u_max=1.0)  # a rigid body and a 0.75 Hz mode
+    >>> bang_bang = Command((0.0, 1.0, 2.0), (1.0, -1.0))  # the rigid body's own: 1.5 periods of the mode
+    >>> f"{residual_after_move(plant, bang_bang, 1.0):.3e}"
+    '9.006e-02'
     """
     plant = as_plant(plant)
     x_f, _ = rest_state(plant, distance, output)

@@ -41,6 +41,15 @@ def refine(plant, x_f, levels, switches, T, scale):
 
     Unknowns and residuals are dimensionless (times / T, states / ``scale``) so that the
     tolerances mean relative accuracy.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from shapefmu.plants.library import rigid_flexible
+    >>> plant = rigid_flexible(1.0, u_max=1.0)  # from a guess of the bang-bang's switch and end
+    >>> switches, T = refine(plant, np.array([1.0, 0.0]), (1.0, -1.0), [0.9], 2.1, np.array([1.0, 1.0]))
+    >>> [float(s) for s in switches], T
+    ([1.0], 2.0)
     """
     A, B = plant.A, plant.B[:, :1]
     t0 = float(T)
@@ -213,6 +222,13 @@ def refine_exact(plant, distance: float, output: int, levels, switches, T, max_i
     With the costate among the unknowns the system is square for any number of switches m (the
     ten pendula's longer moves need n + 1). Returns (switches, T) rounded to double, or None if
     Newton does not converge, reorders the switches or meets a singular Jacobian.
+
+    Examples
+    --------
+    >>> from shapefmu.plants.library import rigid_flexible
+    >>> plant = rigid_flexible(1.0, u_max=1.0)  # x'' = u, |u| <= 1: T = 2 sqrt(X / (b U)) = 2 for X = 1
+    >>> refine_exact(plant, 1.0, 0, (1.0, -1.0), [0.9], 2.1)
+    ([1.0], 2.0)
     """
     plant = as_plant(plant)
     n, m = plant.n_states, len(switches)

@@ -48,6 +48,19 @@ class TimeOptimalSolution:
     refined switch times; ``residual`` is max_i |final_error_i| / peak_i, the peak of |x_i| over
     the move. ``transcription_T`` is the move time of the grid transcription that found the
     structure.
+
+    Examples
+    --------
+    >>> from shapefmu.plants.library import rigid_flexible
+    >>> plant = rigid_flexible(1.0, u_max=1.0)  # x'' = u, |u| <= 1: T = 2 sqrt(X / (b U)) = 2 for X = 1
+    >>> solution = time_optimal(plant, 1.0)
+    >>> solution.T, solution.switch_times, solution.levels
+    (2.0, (1.0,), (1.0, -1.0))
+    >>> print(solution.to_csv(), end="")
+    time,u
+    0,1
+    1,-1
+    2,0
     """
 
     T: float
@@ -117,6 +130,15 @@ def time_optimal(plant, distance: float, u_max: float | None = None, output=0, n
     target that has no rest state within the limit. Warns (RuntimeWarning) if the refined move
     misses the rest state by more than ``tolerance`` (relative to each state's peak), or is longer
     than the grid's move (then it rests but is not the optimum: the structure was wrong).
+
+    Examples
+    --------
+    >>> import math
+    >>> from shapefmu.plants.library import rigid_flexible
+    >>> plant = rigid_flexible(1.0, [(2 * math.pi * 0.75, 0.0, -1.0)], u_max=1.0)  # a rigid body and a 0.75 Hz mode
+    >>> solution = time_optimal(plant, 1.0)  # longer than the rigid body's 2 s: the mode rests too
+    >>> round(solution.T, 7), len(solution.switch_times), solution.residual < 1e-9
+    (2.0777864, 3, True)
     """
     plant = as_plant(plant)
     if progress is not None:
@@ -139,7 +161,16 @@ def _ill_conditioned(plant, levels, switches, T, scale, threshold: float = 1e-8)
 def refine_transcription(plant, grid: Transcription, n_samples: int = 2001,
                          tolerance: float = 1e-9) -> TimeOptimalSolution:
     """The exact time-optimal move from the bang-bang structure of a transcription (``refine``,
-    and ``refine_exact`` where the double-precision fit is ill-conditioned)."""
+    and ``refine_exact`` where the double-precision fit is ill-conditioned).
+
+    Examples
+    --------
+    >>> from shapefmu.plants.library import rigid_flexible
+    >>> plant = rigid_flexible(1.0, u_max=1.0)  # x'' = u, |u| <= 1: T = 2 sqrt(X / (b U)) = 2 for X = 1
+    >>> from shapefmu.optimal.transcription import lp_transcription
+    >>> refine_transcription(plant, lp_transcription(plant, 1.0)).switch_times
+    (1.0,)
+    """
     plant = as_plant(plant)
     distance, u_max, output = grid.distance, grid.u_max, grid.output
     x_f, u_f = rest_state(plant, distance, output)

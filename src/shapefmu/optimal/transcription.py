@@ -99,6 +99,14 @@ def lp_transcription(plant, distance: float, u_max: float | None = None, n_inter
     The grid has max(``n_intervals``, 50 per state) steps, enough for the ten-pendula comb's 21
     switches to fall in separate steps. The grid restricts the input, so its T bounds the true
     minimum from above; its partial steps mark the switches that ``refine`` makes exact.
+
+    Examples
+    --------
+    >>> from shapefmu.plants.library import rigid_flexible
+    >>> plant = rigid_flexible(1.0, u_max=1.0)  # x'' = u, |u| <= 1: T = 2 sqrt(X / (b U)) = 2 for X = 1
+    >>> grid = lp_transcription(plant, 1.0)  # 100 steps: the switch at 1 s falls on the grid
+    >>> grid.T, grid.n_intervals
+    (2.0, 100)
     """
     plant = as_plant(plant)
     u_max = _u_max(plant, u_max)
@@ -152,7 +160,16 @@ def _bisect_move_time(A, B, x_f, u_max, N, rel_tol, distance, output_index) -> T
 @dataclass(frozen=True)
 class Transcription:
     """Result of the direct transcription: move time and the grid input (N equal intervals) of the
-    move of ``output`` by ``distance`` under |u| <= ``u_max``."""
+    move of ``output`` by ``distance`` under |u| <= ``u_max``.
+
+    Examples
+    --------
+    >>> from shapefmu.plants.library import rigid_flexible
+    >>> plant = rigid_flexible(1.0, u_max=1.0)  # x'' = u, |u| <= 1: T = 2 sqrt(X / (b U)) = 2 for X = 1
+    >>> grid = transcribe(plant, 1.0, n_intervals=20)
+    >>> round(grid.T, 6), grid.u.size
+    (2.0, 20)
+    """
 
     T: float
     u: np.ndarray
@@ -182,6 +199,13 @@ def transcribe(plant, distance: float, u_max: float | None = None, n_intervals: 
     the LP bracket), input in units of u_max and each state in units of its peak on the LP's
     feasible move; the step map e^{theta h A} is its Taylor series of order 12 in the free scaled
     time theta = T / t_s (the grid is refined until |theta h A| <= 0.5, truncation < 1e-12).
+
+    Examples
+    --------
+    >>> from shapefmu.plants.library import rigid_flexible
+    >>> plant = rigid_flexible(1.0, u_max=1.0)  # x'' = u, |u| <= 1: T = 2 sqrt(X / (b U)) = 2 for X = 1
+    >>> round(transcribe(plant, 1.0, n_intervals=20).T, 6)
+    2.0
     """
     plant = as_plant(plant)
     u_max = _u_max(plant, u_max)

@@ -35,6 +35,12 @@ def rigid_flexible(
     x_fi'' = -omega_ni^2 x_fi - 2 zeta_i omega_ni x_fi' + b4i u. ``rigid_damping`` is 0 for the pure
     rigid body of eq. (1) and Kt^2/(R J) with back EMF (paper 002, Sec. I and Fig. 5). Outputs are
     the rigid-body position and each modal deflection.
+
+    Examples
+    --------
+    >>> plant = rigid_flexible(2.0, [(10.0, 0.1, -2.0)])  # one mode at 10 rad/s, 10 % damping
+    >>> plant.n_states, plant.outputs, [(round(w, 9), round(z, 9)) for w, z in plant.flexible_modes()]
+    (4, ('position', 'deflection_1'), [(10.0, 0.1)])
     """
     b2 = check_finite(b2, "b2")
     if b2 == 0.0:
@@ -93,6 +99,15 @@ def disk_drive(back_emf: bool = False, n_modes: int = 2) -> Plant:
     With ``back_emf`` the rigid body is damped by the back EMF of the voice coil,
     x_r'' = -(Kt^2/(R J)) x_r' + b2 u, with Kt, R, J from Table I (Kt^2/(R J) = 264.9 1/s).
     ``n_modes`` keeps the first 0, 1 or 2 flexible modes.
+
+    Examples
+    --------
+    >>> import math
+    >>> plant = disk_drive()
+    >>> [round(w / (2 * math.pi), 6) for w, _ in plant.flexible_modes()], dict(plant.limits)
+    ([2000.0, 3000.0], {'voltage': 11.0})
+    >>> round(float(-disk_drive(back_emf=True).A[1, 1]), 1)  # Kt^2 / (R J)
+    264.9
     """
     if n_modes not in (0, 1, 2):
         raise ValueError(f"n_modes must be 0, 1 or 2 (the disk drive has two modelled modes), got {n_modes!r}")
@@ -109,7 +124,15 @@ LSM_DEN = (1.0, 76.17, 4.944e4, 2.822e6, 1.016e8)
 
 def transfer_function(num: Sequence[float], den: Sequence[float], name: str = "transfer_function",
                       input_name: str = "u", output_name: str = "y") -> Plant:
-    """A single-input single-output plant num(s)/den(s) (coefficients in descending powers of s)."""
+    """A single-input single-output plant num(s)/den(s) (coefficients in descending powers of s).
+
+    Examples
+    --------
+    >>> plant = transfer_function([100.0], [1.0, 2.0, 100.0])  # omega_n = 10 rad/s, zeta = 0.1
+    >>> mode = plant.modes()[0]
+    >>> round(mode.omega, 9), round(mode.zeta, 9)
+    (10.0, 0.1)
+    """
     num = tuple(check_finite(c, f"num[{i}]") for i, c in enumerate(num))
     den = tuple(check_finite(c, f"den[{i}]") for i, c in enumerate(den))
     if not den or den[0] == 0.0:
@@ -128,7 +151,14 @@ def transfer_function(num: Sequence[float], den: Sequence[float], name: str = "t
 
 
 def linear_synchronous_motor() -> Plant:
-    """The linear synchronous motor of paper 001, eq. (33): position command in, position out."""
+    """The linear synchronous motor of paper 001, eq. (33): position command in, position out.
+
+    Examples
+    --------
+    >>> plant = linear_synchronous_motor()
+    >>> [(round(m.omega, 2), round(m.zeta, 4)) for m in plant.modes()]
+    [(46.85, 0.6426), (215.14, 0.0371)]
+    """
     return transfer_function(LSM_NUM, LSM_DEN, name="linear_synchronous_motor",
                              input_name="position_command", output_name="position")
 
@@ -139,6 +169,13 @@ def pendula(lengths: Sequence[float], g: float = STANDARD_GRAVITY, zeta: float =
     Linearised about hanging rest, a pendulum of length L on a cart with acceleration a swings as
     L theta'' + 2 zeta omega L theta' + g theta = -a, omega = sqrt(g / L). The state is
     [x, x', theta_1, theta_1', ...]; the cart is the rigid body x'' = a.
+
+    Examples
+    --------
+    >>> import math
+    >>> plant = pendula([1.0, 0.5])  # omega = sqrt(g / L)
+    >>> [round(w, 9) for w, _ in plant.flexible_modes()] == [round(math.sqrt(9.80665 / L), 9) for L in (1.0, 0.5)]
+    True
     """
     lengths = tuple(check_positive(L, f"lengths[{i}]") for i, L in enumerate(lengths))
     if not lengths:
@@ -160,7 +197,14 @@ TEN_PENDULA_LENGTHS = tuple(INCH * (28.8 + 0.6 * i) for i in range(10))
 
 
 def ten_pendula() -> Plant:
-    """The ten-pendula comb of paper 003 (cart acceleration in, cart position and ten angles out)."""
+    """The ten-pendula comb of paper 003 (cart acceleration in, cart position and ten angles out).
+
+    Examples
+    --------
+    >>> plant = ten_pendula()
+    >>> plant.n_states, len(plant.flexible_modes())
+    (22, 10)
+    """
     return pendula(TEN_PENDULA_LENGTHS, name="ten_pendula")
 
 
@@ -171,6 +215,13 @@ def mass_spring_chain(masses: Sequence[float], springs: Sequence[float], dampers
     m_i x_i'' = k_{i-1} (x_{i-1} - x_i) + k_i (x_{i+1} - x_i) + the same with c and velocities,
     plus the force F on mass 1. With no spring to ground the chain has a rigid-body mode.
     The state is [x_1, x_1', ..., x_N, x_N']; outputs are the positions of all masses.
+
+    Examples
+    --------
+    >>> import math
+    >>> plant = mass_spring_chain([1.0, 1.0], [100.0])  # two unit masses: sqrt(2 k / m)
+    >>> math.isclose(plant.flexible_modes()[0][0], math.sqrt(200.0))
+    True
     """
     masses = tuple(check_positive(m, f"masses[{i}]") for i, m in enumerate(masses))
     n = len(masses)
@@ -218,6 +269,15 @@ def sprung_masses(masses: Sequence[float], stiffnesses: Sequence[float], dampers
     Marlin #26655: 1 kg at 30 Hz, 1.3 kg at 30 / sqrt(1.3) = 26.3 Hz). The state is
     [x, v, e_1, e_1', ...]; the outputs are the carriage position, each deflection e_i, then each
     mass's acceleration a + e_i'' = -(k_i e_i + c_i e_i') / m_i, what an accelerometer on it reads.
+
+    Examples
+    --------
+    >>> import math
+    >>> bed = sprung_masses([1.0], [35530.57584392168], [18.84955592153876])  # Marlin #26655's bed
+    >>> [(round(w / (2 * math.pi), 6), round(z, 6)) for w, z in bed.flexible_modes()]  # sqrt(k/m), c/(2 sqrt(km))
+    [(30.0, 0.05)]
+    >>> bed.outputs
+    ('carriage_position', 'deflection_1', 'acceleration_1')
     """
     masses = tuple(check_positive(m, f"masses[{i}]") for i, m in enumerate(masses))
     if not masses:
@@ -229,9 +289,29 @@ def sprung_masses(masses: Sequence[float], stiffnesses: Sequence[float], dampers
         raise ValueError(f"{n} sprung masses need {n} stiffnesses and dampers, got {len(stiffnesses)} and {len(dampers)}")
     if any(c < 0 for c in dampers):
         raise ValueError(f"dampers must be >= 0 N*s/m, got {dampers}")
-    A = np.zeros((2 + 2 * n, 2 + 2 * n))
-    B = np.zeros((2 + 2 * n, 1))
-    C = np.zeros((1 + 2 * n, 2 + 2 * n))
+    A, B, C, D = sprung_masses_matrices(masses, stiffnesses, dampers)
+    states = ["x", "v"] + [s for i in range(1, n + 1) for s in (f"e_{i}", f"de_{i}")]
+    outputs = (["carriage_position"] + [f"deflection_{i}" for i in range(1, n + 1)]
+               + [f"acceleration_{i}" for i in range(1, n + 1)])
+    parameters = {"masses": Parameter(masses, "kg"), "stiffnesses": Parameter(stiffnesses, "N/m"),
+                  "dampers": Parameter(dampers, "N*s/m")}
+    return Plant(A, B, C, D, inputs=("acceleration",), outputs=outputs, states=states,
+                 parameters=parameters, name=name, kind="sprung_masses")
+
+
+def sprung_masses_matrices(masses, stiffnesses, dampers, zeros=lambda rows, columns: np.zeros((rows, columns))):
+    """A, B, C, D of ``sprung_masses`` (state [x, v, e_1, e_1', ...]) from unchecked parameters of
+    any type that divides and negates: floats here, CasADi symbols in the plant-FMU generator
+    (``shapefmu.fmi.native.linear``), whose ``zeros(rows, columns)`` makes the matrices.
+
+    Examples
+    --------
+    >>> A, B, C, D = sprung_masses_matrices([2.0], [50.0], [4.0])
+    >>> A[3].tolist(), C[2].tolist()  # e'' = -(k/m) e - (c/m) e' - a; the accelerometer reads a + e''
+    ([0.0, 0.0, -25.0, -2.0], [0.0, 0.0, -25.0, -2.0])
+    """
+    n = len(masses)
+    A, B, C, D = zeros(2 + 2 * n, 2 + 2 * n), zeros(2 + 2 * n, 1), zeros(1 + 2 * n, 2 + 2 * n), zeros(1 + 2 * n, 1)
     A[0, 1] = 1.0
     B[1, 0] = 1.0
     C[0, 0] = 1.0
@@ -242,11 +322,6 @@ def sprung_masses(masses: Sequence[float], stiffnesses: Sequence[float], dampers
         A[e + 1, e + 1] = -c / m
         B[e + 1, 0] = -1.0
         C[1 + i, e] = 1.0
-        C[1 + n + i, e:e + 2] = (-k / m, -c / m)
-    states = ["x", "v"] + [s for i in range(1, n + 1) for s in (f"e_{i}", f"de_{i}")]
-    outputs = (["carriage_position"] + [f"deflection_{i}" for i in range(1, n + 1)]
-               + [f"acceleration_{i}" for i in range(1, n + 1)])
-    parameters = {"masses": Parameter(masses, "kg"), "stiffnesses": Parameter(stiffnesses, "N/m"),
-                  "dampers": Parameter(dampers, "N*s/m")}
-    return Plant(A, B, C, np.zeros((1 + 2 * n, 1)), inputs=("acceleration",), outputs=outputs, states=states,
-                 parameters=parameters, name=name, kind="sprung_masses")
+        C[1 + n + i, e] = -k / m
+        C[1 + n + i, e + 1] = -c / m
+    return A, B, C, D

@@ -43,7 +43,13 @@ from shapefmu.plants.scheduling import ScheduledPlant, SchedulingInput
 @dataclass(frozen=True)
 class ParameterSpec:
     """A parameter of a kind: whether it is a list, required, and the units it may be given in
-    with their factor to the unit the constructor takes (None: any non-empty unit is accepted)."""
+    with their factor to the unit the constructor takes (None: any non-empty unit is accepted).
+
+    Examples
+    --------
+    >>> PARAMETER_SPECS["rigid_flexible"]["f"].units  # a frequency in Hz or rad/s, to rad/s
+    {'Hz': 6.283185307179586, 'rad/s': 1.0}
+    """
 
     array: bool
     required: bool = True
@@ -306,12 +312,57 @@ def _scheduling(raw, written: dict, signals, source) -> SchedulingInput:
 
 def loads(text: str, source: str = "<string>") -> Plant:
     """Parse a plant model from TOML text; ``source`` names the file in error messages. A model with a
-    scheduling input is read as the plant at its start value (``loads_scheduled`` for the rest)."""
+    scheduling input is read as the plant at its start value (``loads_scheduled`` for the rest).
+
+    Examples
+    --------
+    >>> text = '''
+    ... kind = "rigid_flexible"
+    ... [parameters]
+    ... b2 = { value = 2.0, unit = "1/(N*s^2)" }
+    ... f = { value = [5.0], unit = "Hz" }
+    ... zeta = { value = [0.02], unit = "1" }
+    ... b4 = { value = [-2.0], unit = "1/(N*s^2)" }
+    ... [inputs]
+    ... force = { unit = "N", max = 1.0 }
+    ... [outputs]
+    ... x = { unit = "m" }
+    ... deflection = { unit = "m" }
+    ... '''
+    >>> plant = loads(text, "example.toml")
+    >>> plant.name, plant.inputs, dict(plant.limits), round(plant.flexible_modes()[0][0] / 6.283185307179586, 9)
+    ('example', ('force',), {'force': 1.0}, 5.0)
+    """
     return _read(text, source)[0]
 
 
 def loads_scheduled(text: str, source: str = "<string>") -> ScheduledPlant:
-    """Parse a plant model that declares a [scheduling] table (``shapefmu.plants.scheduling``)."""
+    """Parse a plant model that declares a [scheduling] table (``shapefmu.plants.scheduling``).
+
+    Examples
+    --------
+    >>> text = '''
+    ... kind = "sprung_masses"
+    ... [parameters]
+    ... masses = { value = [1.0], unit = "kg" }
+    ... stiffnesses = { value = [400.0], unit = "N/m" }
+    ... [inputs]
+    ... acceleration = { unit = "m/s^2" }
+    ... [outputs]
+    ... carriage = { unit = "m" }
+    ... deflection = { unit = "m" }
+    ... acceleration_1 = { unit = "m/s^2" }
+    ... [scheduling]
+    ... name = "added_mass"
+    ... unit = "kg"
+    ... min = 0.0
+    ... max = 3.0
+    ... per_unit = { masses = [1.0] }
+    ... '''
+    >>> plant = loads_scheduled(text, "example.toml")
+    >>> [round(w, 9) for w, _ in plant.flexible_modes_at(3.0)]  # sqrt(400 / (1 + 3)) rad/s
+    [10.0]
+    """
     scheduled = _read(text, source)[1]
     if scheduled is None:
         raise ValueError(f"{source}: declares no [scheduling] table: its parameters depend on no input")
@@ -319,19 +370,45 @@ def loads_scheduled(text: str, source: str = "<string>") -> ScheduledPlant:
 
 
 def load_scheduled(path) -> ScheduledPlant:
-    """Read a model file with a scheduling input, or the shipped model of that name (``printer_bed``)."""
+    """Read a model file with a scheduling input, or the shipped model of that name (``printer_bed``).
+
+    Examples
+    --------
+    >>> import math
+    >>> bed = load_scheduled("printer_bed")  # 1 kg at 30 Hz, zeta 0.05, gaining up to 300 g
+    >>> [(round(w / (2 * math.pi), 4), round(z, 5)) for w, z in bed.flexible_modes_at(300.0)]
+    [(26.3117, 0.04385)]
+
+    30 / sqrt(1.3) = 26.3117 Hz and 0.05 / sqrt(1.3) = 0.04385: the damper stays, the mass grows.
+    """
     path = os.fspath(shipped.find(path, (".toml",)))
     return loads_scheduled(read_text_file(path, "plant model"), source=path)
 
 
 def load(path) -> Plant:
-    """Read a plant model file (``models/*.toml``), or the shipped model of that name (``disk_drive``)."""
+    """Read a plant model file (``models/*.toml``), or the shipped model of that name (``disk_drive``).
+
+    Examples
+    --------
+    >>> plant = load("disk_drive")  # the shipped models/disk_drive.toml
+    >>> plant.kind, plant.n_states, plant.parameters["f"]
+    ('rigid_flexible', 6, Parameter(value=(2000.0, 3000.0), unit='Hz'))
+    """
     path = os.fspath(shipped.find(path, (".toml",)))
     return loads(read_text_file(path, "plant model"), source=path)
 
 
 def as_plant(system) -> Plant:
-    """A ``Plant`` from a plant, a python-control LTI, or a path to a model file."""
+    """A ``Plant`` from a plant, a python-control LTI, or a path to a model file.
+
+    Examples
+    --------
+    >>> import control
+    >>> as_plant(control.tf([1.0], [1.0, 0.0, 100.0])).n_states  # a python-control LTI
+    2
+    >>> as_plant("disk_drive").name  # a model file, or a shipped model's name
+    'disk_drive'
+    """
     if isinstance(system, Plant):
         return system
     if isinstance(system, (control.StateSpace, control.TransferFunction)):
@@ -343,7 +420,16 @@ def as_plant(system) -> Plant:
 
 def describe(path_or_plant) -> str:
     """The text of ``shapefmu plant show FILE``: the plant's signals, parameters and modes (of a model
-    file with a scheduling input: at its start value, then the input and the lowest mode along it)."""
+    file with a scheduling input: at its start value, then the input and the lowest mode along it).
+
+    Examples
+    --------
+    >>> for line in describe("disk_drive").splitlines()[:3]:
+    ...     print(line)
+    plant disk_drive (kind rigid_flexible), 6 states
+      input  voltage  |u| <= 11
+      outputs position, deflection_1, deflection_2
+    """
     scheduled = None
     if isinstance(path_or_plant, str) or hasattr(path_or_plant, "__fspath__"):
         path = os.fspath(shipped.find(path_or_plant, (".toml",)))

@@ -20,7 +20,13 @@ from scipy.linalg import schur, solve_sylvester
 
 @dataclass(frozen=True)
 class Parameter:
-    """A physical parameter: its value (a float or a tuple of floats) and its unit."""
+    """A physical parameter: its value (a float or a tuple of floats) and its unit.
+
+    Examples
+    --------
+    >>> Parameter((2000.0, 3000.0), "Hz").unit
+    'Hz'
+    """
 
     value: float | tuple[float, ...]
     unit: str
@@ -39,6 +45,13 @@ class Mode:
     b4/omega^2 times 1/sqrt(1 - zeta^2), and never 0 for a mode that is seen. A mode the input does not
     excite, or no output sees, has participation 0. Poles at the origin (rigid body) have no
     finite static gain: their omega is 0 and their participation ``inf``.
+
+    Examples
+    --------
+    >>> from shapefmu.plants.library import transfer_function
+    >>> mode = transfer_function([100.0], [1.0, 2.0, 100.0]).modes()[0]  # 100 / (s^2 + 2 s + 100)
+    >>> round(mode.hz, 6), mode.oscillatory, round(mode.participation, 9)  # 1 / sqrt(1 - zeta^2)
+    (1.591549, True, 1.005037815)
     """
 
     omega: float
@@ -73,6 +86,13 @@ class Plant:
     ``A`` (n x n), ``B`` (n x m), ``C`` (p x n), ``D`` (p x m) are copied into read-only float arrays.
     ``parameters`` maps a parameter name to its ``Parameter`` (value with unit); ``limits`` maps an
     input name to its symmetric actuator limit |u| <= limit (e.g. the 11 V of paper 002, Table I).
+
+    Examples
+    --------
+    >>> import control
+    >>> plant = Plant.from_lti(control.tf([1.0], [1.0, 0.0, 100.0]), name="spring")
+    >>> plant.n_states, [(round(w, 9), round(z, 9)) for w, z in plant.flexible_modes()]
+    (2, [(10.0, 0.0)])
     """
 
     A: np.ndarray
@@ -191,6 +211,15 @@ def decouple(plant: Plant, keep) -> tuple[np.ndarray, np.ndarray, np.ndarray, np
     A11 X - X A22 = -A12 then removes the coupling block (it is solvable because the two blocks
     have no eigenvalue in common). Unlike an eigenvector basis this handles Jordan blocks, such
     as the double integrator of a rigid body.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from shapefmu.plants.library import rigid_flexible
+    >>> plant = rigid_flexible(2.0, [(10.0, 0.1, -2.0)])
+    >>> A11, B1, C1, rest = decouple(plant, lambda re, im: abs(im) > 0)  # the mode alone
+    >>> [complex(round(p.real, 6), round(p.imag, 6)) for p in np.linalg.eigvals(A11)]
+    [(-1+9.949874j), (-1-9.949874j)]
     """
     A = plant.A
     n = A.shape[0]
@@ -233,6 +262,13 @@ def rigid_part(plant: Plant) -> Plant:
 
     For the plants of paper 002 this is the rigid body b2/s^2 (or b2/(s (s + Kt^2/(R J)))) whose
     bang-bang, eq. (2), the shapers are convolved with.
+
+    Examples
+    --------
+    >>> from shapefmu.plants.library import disk_drive
+    >>> rigid = rigid_part(disk_drive())  # b2 / s^2
+    >>> rigid.n_states, rigid.kind
+    (2, 'rigid_part')
     """
     eigenvalues = np.linalg.eigvals(plant.A)
     scale = max(np.max(np.abs(eigenvalues)), 1.0)

@@ -40,7 +40,18 @@ class SchedulingInput:
     """The input a plant's parameters depend on: its ``name`` and ``unit``, its range
     [``minimum``, ``maximum``], the ``start`` value the file's parameters describe, and ``per_unit``:
     parameter name -> change of its value per unit of the input, in the parameter's unit (a float, or
-    a tuple as long as the parameter's list)."""
+    a tuple as long as the parameter's list).
+
+    Examples
+    --------
+    >>> rope = SchedulingInput("rope_length", "m", 0.5, 2.0, 1.0, {"lengths": (1.0,)})
+    >>> rope.parameters_at({"lengths": Parameter((1.0,), "m")}, 2.0)  # 1 m + 1 m/m * (2 - 1) m
+    {'lengths': Parameter(value=(2.0,), unit='m')}
+    >>> rope.check(3.0)
+    Traceback (most recent call last):
+    ...
+    ValueError: rope_length must be in [0.5, 2] m, got 3.0
+    """
 
     name: str
     unit: str
@@ -76,7 +87,15 @@ class SchedulingInput:
 @dataclass(frozen=True)
 class ModeCurve:
     """Modes along the scheduling input: ``values`` of the input, and at each the natural frequency
-    ``frequencies`` (Hz) and damping ratio ``zetas`` of one mode, computed from the model."""
+    ``frequencies`` (Hz) and damping ratio ``zetas`` of one mode, computed from the model.
+
+    Examples
+    --------
+    >>> from shapefmu.plants import load_scheduled
+    >>> curve = load_scheduled("gantry_crane").mode_curve([0.5, 2.0])  # rope lengths, m
+    >>> [round(f, 6) for f in curve.frequencies]  # sqrt(g / L) / (2 pi) with g = 9.80665
+    [0.704848, 0.352424]
+    """
 
     values: tuple[float, ...]
     frequencies: tuple[float, ...]
@@ -86,7 +105,15 @@ class ModeCurve:
 @dataclass(frozen=True, eq=False)
 class ScheduledPlant:
     """A plant model with a scheduling input: ``plant`` is the model at ``scheduling.start``, ``at(s)``
-    the model at another value. ``build`` turns the file's parameters into a plant (the loader's)."""
+    the model at another value. ``build`` turns the file's parameters into a plant (the loader's).
+
+    Examples
+    --------
+    >>> from shapefmu.plants import load_scheduled
+    >>> bed = load_scheduled("printer_bed")
+    >>> bed.plant.parameters["masses"], bed.at(300.0).parameters["masses"]  # 300 g at 0.001 kg/g
+    (Parameter(value=(1.0,), unit='kg'), Parameter(value=(1.3,), unit='kg'))
+    """
 
     plant: Plant
     scheduling: SchedulingInput

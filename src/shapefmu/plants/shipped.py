@@ -18,7 +18,13 @@ SYSTEM_SUFFIXES = (".ssd",)  # SSP systems of the papers' examples
 
 
 def models_folder() -> Path:
-    """The folder of the shipped models: the wheel's package data, else the checkout's ``models/``."""
+    """The folder of the shipped models: the wheel's package data, else the checkout's ``models/``.
+
+    Examples
+    --------
+    >>> (models_folder() / "disk_drive.toml").is_file()
+    True
+    """
     packaged = Path(__file__).resolve().parent / "models"
     if packaged.is_dir():
         return packaged
@@ -26,7 +32,13 @@ def models_folder() -> Path:
 
 
 def shipped(suffixes: tuple[str, ...] = MODEL_SUFFIXES + SYSTEM_SUFFIXES) -> list[Path]:
-    """The shipped files with those suffixes, by name."""
+    """The shipped files with those suffixes, by name.
+
+    Examples
+    --------
+    >>> [path.name for path in shipped((".ssd",))]  # the papers' SSP systems
+    ['disk_drive_shaped.ssd', 'disk_drive_stos.ssd']
+    """
     folder = models_folder()
     if not folder.is_dir():
         return []
@@ -35,7 +47,13 @@ def shipped(suffixes: tuple[str, ...] = MODEL_SUFFIXES + SYSTEM_SUFFIXES) -> lis
 
 def find(name_or_path, suffixes: tuple[str, ...] = MODEL_SUFFIXES, what: str = "plant model") -> Path:
     """``name_or_path`` as an existing file, or the shipped file of that name (``disk_drive`` or
-    ``disk_drive.toml``); a ValueError names what ships when neither exists."""
+    ``disk_drive.toml``); a ValueError names what ships when neither exists.
+
+    Examples
+    --------
+    >>> find("disk_drive").name, find("pendulum").name
+    ('disk_drive.toml', 'pendulum.py')
+    """
     text = os.fspath(name_or_path)
     path = Path(text)
     if path.exists() or "/" in text or os.sep in text:
@@ -51,7 +69,13 @@ def find(name_or_path, suffixes: tuple[str, ...] = MODEL_SUFFIXES, what: str = "
 
 
 def describe() -> str:
-    """The text of ``shapefmu plant list``: each shipped model and system with what it is."""
+    """The text of ``shapefmu plant list``: each shipped model and system with what it is.
+
+    Examples
+    --------
+    >>> print(describe().splitlines()[1])
+      disk_drive                   rigid_flexible: voice-coil disk drive, rigid body + 2.0 kHz and 3.0 kHz modes
+    """
     lines = ["plant models (shapefmu plant show|build NAME, optimal NAME, stos NAME, compare NAME):"]
     for path in shipped(MODEL_SUFFIXES):
         lines.append(f"  {path.stem:28s} {_summary(path)}")

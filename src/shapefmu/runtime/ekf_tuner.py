@@ -19,11 +19,11 @@ unshaped); ``pending`` says that a design is waiting.
 
 from .checks import check_count, check_positive
 from .ekf import ResonanceEKF
-from .shaper_designs import design_impulses
+from .shaper_designs import CLOSED_FORM, design_impulses
 from .shaper_filter import StreamingShaper
 
 # The closed-form kinds, cheap enough to re-design at every re-tune.
-KINDS = ("zv", "zvd", "zvdd", "zv_dn", "mzv")
+KINDS = tuple(CLOSED_FORM)
 
 
 class EKFTunedShaperKernel:

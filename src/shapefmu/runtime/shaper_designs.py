@@ -27,6 +27,10 @@ SINGLE_MODE = {
     "ei3": lambda w, z, n, vtol: ei.ei3(w, z, vtol),
 }
 KINDS = (*SINGLE_MODE, "simultaneous")
+# The closed-form kinds, with their impulses per mode for the derivative order n: the kinds a native
+# FMU re-designs in C (c/shaper_designs.c lists the same names, tests/test_closed_form_kinds.py checks
+# it) and the EKF tuner re-designs at every re-tune.
+CLOSED_FORM = {"zv": lambda n: 2, "zvd": lambda n: 3, "zvdd": lambda n: 4, "zv_dn": lambda n: n + 2, "mzv": lambda n: 3}
 
 # Convolution makes coincident times (t_a + t_b == t_b + t_a); closer than this fraction of the
 # shaper's length they are one impulse (as ImpulseShaper.from_impulses).

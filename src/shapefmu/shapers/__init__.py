@@ -1,7 +1,9 @@
 """Shaper designs: impulse shapers, window shape filters, twin-pulse and time-frequency profiles.
 
 Single-mode designs share one signature, ``design(omega, zeta, ...)`` with omega in rad/s;
-multi-mode designs take a sequence of ``(omega, zeta)`` modes. Design layer: imports ``runtime``
+multi-mode designs take a sequence of ``(omega, zeta)`` modes. Every signature says its unit: a
+frequency's name carries it (``omega``: rad/s, ``f``: Hz) and its annotation too (``RadPerSecond``,
+``Hz`` of ``shapefmu.runtime.units``, where the convention is written). Design layer: imports ``runtime``
 (whose formulas the FMUs re-run) and numpy / scipy, nothing above.
 """
 
@@ -38,6 +40,7 @@ from shapefmu.shapers.window import (
     blackman_filter,
     convolved_filter,
     differenced_filter,
+    get_window,
     hamming_filter,
     hamming_null_depth,
     hanning_filter,
@@ -69,6 +72,7 @@ __all__ = [
     "ei2",
     "ei3",
     "energy_leakage",
+    "get_window",
     "hamming_filter",
     "hamming_null_depth",
     "hanning_filter",

@@ -16,26 +16,50 @@ from __future__ import annotations
 
 from shapefmu.runtime import ei as runtime_ei
 from shapefmu.runtime.ei import NU_MAX, VTOL_MAX, VTOL_MIN, ZETA_MAX  # noqa: F401  (the limits, re-exported)
+from shapefmu.runtime.units import RadPerSecond
 from shapefmu.shapers.impulse import ImpulseShaper
 
 
-def ei(omega: float, zeta: float = 0.0, vtol: float = 0.05) -> ImpulseShaper:
+def ei(omega: RadPerSecond, zeta: float = 0.0, vtol: float = 0.05) -> ImpulseShaper:
     """Extra-insensitive shaper: 3 impulses over one damped period, V(omega) = vtol.
 
     Undamped it is (1+V)/4, (1-V)/2, (1+V)/4 at 0, T/2, T; with damping the constraints in the
     module docstring of ``shapefmu.runtime.ei`` are solved exactly. I(5 %) = 0.399 at zeta = 0
     (ZVD: 0.287).
+
+    Examples
+    --------
+    >>> import math
+    >>> s = ei(2 * math.pi, 0.0, 0.05)  # 1 Hz: (1 + V)/4, (1 - V)/2, (1 + V)/4 at 0, 0.5, 1 s
+    >>> s.times, [round(a, 12) for a in s.amplitudes]
+    ((0.0, 0.5, 1.0), [0.2625, 0.475, 0.2625])
     """
     return _shaper(runtime_ei.ei(omega, zeta, vtol))
 
 
-def ei2(omega: float, zeta: float = 0.0, vtol: float = 0.05) -> ImpulseShaper:
-    """Two-hump EI: 4 impulses over 1.5 periods, zero at omega, humps of vtol either side."""
+def ei2(omega: RadPerSecond, zeta: float = 0.0, vtol: float = 0.05) -> ImpulseShaper:
+    """Two-hump EI: 4 impulses over 1.5 periods, zero at omega, humps of vtol either side.
+
+    Examples
+    --------
+    >>> import math
+    >>> s = ei2(2 * math.pi)
+    >>> s.times, round(s.gain, 12)
+    ((0.0, 0.5, 1.0, 1.5), 1.0)
+    """
     return _shaper(runtime_ei.ei2(omega, zeta, vtol))
 
 
-def ei3(omega: float, zeta: float = 0.0, vtol: float = 0.05) -> ImpulseShaper:
-    """Three-hump EI: 5 impulses over 2 periods, humps of vtol at omega and either side."""
+def ei3(omega: RadPerSecond, zeta: float = 0.0, vtol: float = 0.05) -> ImpulseShaper:
+    """Three-hump EI: 5 impulses over 2 periods, humps of vtol at omega and either side.
+
+    Examples
+    --------
+    >>> from math import pi
+    >>> from shapefmu.analysis import residual_vibration
+    >>> round(residual_vibration(ei3(2 * pi), 2 * pi, 0.0), 12)  # the middle hump, vtol at omega
+    0.05
+    """
     return _shaper(runtime_ei.ei3(omega, zeta, vtol))
 
 

@@ -16,6 +16,7 @@ import numpy as np
 from shapefmu.runtime import impulse_formulas
 from shapefmu.runtime.checks import check_finite
 from shapefmu.runtime.shaper_filter import grid_impulses
+from shapefmu.runtime.units import RadPerSecond
 
 # Impulses closer than this (relative to the shaper's duration) are one impulse: convolution
 # produces coincident times, e.g. T1 + T2 == T2 + T1.
@@ -27,6 +28,14 @@ class ImpulseShaper:
     """A sequence of impulses ``amplitudes[i]`` at ``times[i]`` (seconds, sorted, first at >= 0).
 
     Convolving a command with it gives the shaped command y(t) = sum_i A_i u(t - t_i).
+
+    Examples
+    --------
+    >>> s = ImpulseShaper((0.0, 0.5), (0.5, 0.5))
+    >>> s.duration, s.gain, len(s)
+    (0.5, 1.0, 2)
+    >>> s.convolve(s).amplitudes  # ZV * ZV = ZVD: binomial amplitudes
+    (0.25, 0.5, 0.25)
     """
 
     times: tuple[float, ...]
@@ -131,39 +140,88 @@ def _shaper(pair) -> ImpulseShaper:
     return ImpulseShaper(tuple(times), tuple(amplitudes))
 
 
-def zv(omega: float, zeta: float = 0.0) -> ImpulseShaper:
-    """Zero-vibration shaper (paper 002, eq. 3): two impulses half a damped period apart."""
+def zv(omega: RadPerSecond, zeta: float = 0.0) -> ImpulseShaper:
+    """Zero-vibration shaper (paper 002, eq. 3): two impulses half a damped period apart.
+
+    ``omega`` (rad/s) is the undamped natural frequency, ``zeta`` the damping ratio.
+
+    Examples
+    --------
+    >>> import math
+    >>> s = zv(2 * math.pi * 1.0)  # a 1 Hz mode: half a period is 0.5 s
+    >>> s.times, s.amplitudes
+    ((0.0, 0.5), (0.5, 0.5))
+    >>> K = math.exp(-0.1 * math.pi / math.sqrt(1 - 0.1**2))  # damped: 1/(1+K), K/(1+K)
+    >>> math.isclose(zv(2 * math.pi, 0.1).amplitudes[0], 1 / (1 + K))
+    True
+    """
     return _shaper(impulse_formulas.zv_dn(omega, zeta, 0))
 
 
-def zvd(omega: float, zeta: float = 0.0) -> ImpulseShaper:
-    """Zero-vibration-derivative shaper: ZV convolved with itself (one period long)."""
+def zvd(omega: RadPerSecond, zeta: float = 0.0) -> ImpulseShaper:
+    """Zero-vibration-derivative shaper: ZV convolved with itself (one period long).
+
+    Examples
+    --------
+    >>> import math
+    >>> zvd(2 * math.pi).amplitudes  # 1 Hz: (1 + z)^2 / 4 at 0, 0.5, 1 s
+    (0.25, 0.5, 0.25)
+    """
     return _shaper(impulse_formulas.zv_dn(omega, zeta, 1))
 
 
-def zvdd(omega: float, zeta: float = 0.0) -> ImpulseShaper:
-    """ZVDD shaper: ZV convolved three times (1.5 periods long)."""
+def zvdd(omega: RadPerSecond, zeta: float = 0.0) -> ImpulseShaper:
+    """ZVDD shaper: ZV convolved three times (1.5 periods long).
+
+    Examples
+    --------
+    >>> import math
+    >>> s = zvdd(2 * math.pi)
+    >>> s.duration, s.amplitudes
+    (1.5, (0.125, 0.375, 0.375, 0.125))
+    """
     return _shaper(impulse_formulas.zv_dn(omega, zeta, 2))
 
 
-def zv_dn(omega: float, zeta: float, n: int) -> ImpulseShaper:
+def zv_dn(omega: RadPerSecond, zeta: float, n: int) -> ImpulseShaper:
     """ZV convolved n+1 times: residual and its first n frequency derivatives vanish at omega.
 
     Amplitudes C(n+1, i) K^i / (1+K)^(n+1) at i*pi/omega_d, K = exp(-zeta*pi/sqrt(1-zeta^2)).
+
+    Examples
+    --------
+    >>> import math
+    >>> zv_dn(2 * math.pi, 0.0, 3).amplitudes  # C(4, i) / 16
+    (0.0625, 0.25, 0.375, 0.25, 0.0625)
     """
     return _shaper(impulse_formulas.zv_dn(omega, zeta, n))
 
 
-def mzv(omega: float, zeta: float = 0.0) -> ImpulseShaper:
+def mzv(omega: RadPerSecond, zeta: float = 0.0) -> ImpulseShaper:
     """Three impulses over 0.75 of the damped period (spacing 3*pi/(4*omega_d)).
 
     Amplitudes (1, sqrt(2) K, K^2)/(1 + sqrt(2) K + K^2), K = exp(-zeta*omega*3*pi/(4*omega_d)),
     derived in ``runtime.impulse_formulas.mzv`` from the zero-vibration constraint.
+
+    Examples
+    --------
+    >>> import math
+    >>> s = mzv(2 * math.pi)  # undamped: K = 1, amplitudes 1/(2 + sqrt 2), sqrt 2/(2 + sqrt 2)
+    >>> s.times, round(s.amplitudes[1], 12) == round(math.sqrt(2) / (2 + math.sqrt(2)), 12)
+    ((0.0, 0.375, 0.75), True)
     """
     return _shaper(impulse_formulas.mzv(omega, zeta))
 
 
-def um_zv(omega: float, zeta: float = 0.0) -> ImpulseShaper:
-    """Unity-magnitude ZV: +1, -1, +1 at 0, ~T/6, ~T/3, times solved exactly for the damping."""
+def um_zv(omega: RadPerSecond, zeta: float = 0.0) -> ImpulseShaper:
+    """Unity-magnitude ZV: +1, -1, +1 at 0, ~T/6, ~T/3, times solved exactly for the damping.
+
+    Examples
+    --------
+    >>> import math
+    >>> s = um_zv(2 * math.pi)  # undamped: exactly T/6 and T/3
+    >>> s.amplitudes, [round(t, 12) for t in s.times]
+    ((1.0, -1.0, 1.0), [0.0, 0.166666666667, 0.333333333333])
+    """
     return _shaper(impulse_formulas.um_zv(omega, zeta))
 

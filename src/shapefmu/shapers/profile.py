@@ -33,6 +33,12 @@ class MotionProfile:
 
     The last acceleration entry is 0 (the move is over). ``kernel`` is the sampled shaper the profile
     is built from (same ``ts``); see the module docstring for how the arrays relate.
+
+    Examples
+    --------
+    >>> m = from_acceleration([1.0, -1.0], 0.5)  # bang-bang of 1 m/s2, 0.5 s each way
+    >>> m.t.tolist(), m.velocity.tolist(), m.distance, m.duration
+    ([0.0, 0.5, 1.0], [0.0, 0.5, 0.0], 0.25, 1.0)
     """
 
     t: np.ndarray
@@ -79,6 +85,12 @@ def from_acceleration(acceleration, ts: float, kernel: SampledShaper | None = No
     """Integrate a zero-order-held acceleration ``a[k]`` (k = 0..N-1) exactly on the grid 0..N*ts.
 
     ``kernel`` defaults to the acceleration itself as a sampled sequence.
+
+    Examples
+    --------
+    >>> m = from_acceleration([1.0, 1.0, -1.0, -1.0], 0.5)  # exact: p = a t^2 / 2 on each piece
+    >>> m.position.tolist()
+    [0.0, 0.125, 0.5, 0.875, 1.0]
     """
     ts = check_positive(ts, "ts")
     a = np.asarray(acceleration, dtype=float).ravel()
@@ -97,6 +109,14 @@ def velocity_profile(shaper: SampledShaper, distance: float) -> MotionProfile:
     velocity profile in its own right; the acceleration is the held difference
     ``(v[k+1] - v[k]) / ts`` and the position reaches ``distance * sum(f)``. Raises ValueError if
     the filter does not start and end at zero (the velocity would jump).
+
+    Examples
+    --------
+    >>> import math
+    >>> from shapefmu.shapers.window import hanning_filter
+    >>> m = velocity_profile(hanning_filter(2 * math.pi, 0.0, 0.25), 2.0)  # a 1 Hz Hanning, 2 m
+    >>> round(m.distance, 12), float(m.velocity[0]), float(m.velocity[-1])
+    (2.0, 0.0, 0.0)
     """
     distance = check_positive(distance, "distance")
     f = shaper.taps

@@ -16,6 +16,14 @@ class SampledShaper:
 
     Any sampled command can be wrapped the same way to analyse its residual vibration
     (``SampledShaper(u, ts)``); shapers designed by this package have taps summing to 1.
+
+    Examples
+    --------
+    >>> s = SampledShaper([0.5, 0.5], 0.1)  # a ZV of a 5 Hz mode, sampled at 10 Hz
+    >>> s.times.tolist(), s.gain, s.duration
+    ([0.0, 0.1], 1.0, 0.1)
+    >>> s.convolve(s).taps.tolist()  # its ZVD
+    [0.25, 0.5, 0.25]
     """
 
     taps: np.ndarray

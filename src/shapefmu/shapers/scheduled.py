@@ -36,7 +36,17 @@ from shapefmu.shapers.impulse import ImpulseShaper
 @dataclass(frozen=True)
 class Schedule:
     """Rows (``values``, ``frequencies`` in Hz, ``zetas``), linear in the value between rows; beyond
-    the ends the end rows hold, unless ``extrapolate`` (a law). See ``runtime.scheduled_shaper.ModeSchedule``."""
+    the ends the end rows hold, unless ``extrapolate`` (a law). See ``runtime.scheduled_shaper.ModeSchedule``.
+
+    Examples
+    --------
+    >>> bed = Schedule((0.0, 300.0), (30.0, 26.31), (0.05, 0.044))
+    >>> [round(x, 4) for x in bed.mode(150.0)]  # halfway: 28.155 Hz = 176.9031 rad/s, zeta 0.047
+    [176.9031, 0.047]
+    >>> law = Schedule.linear_law(30.0, -0.0125, 0.05)  # Hz per gram, Marlin's dynamic frequency
+    >>> [round(x, 4) for x in law.mode(300.0)]  # 30 - 3.75 = 26.25 Hz = 164.9336 rad/s
+    [164.9336, 0.05]
+    """
 
     values: tuple[float, ...]
     frequencies: tuple[float, ...]
@@ -69,7 +79,14 @@ class Schedule:
 class ScheduledShaper:
     """A shaper of ``kind`` (a single-mode kind of ``runtime.shaper_designs``; ``n`` and ``vtol`` as
     there) sampled at ``ts``, designed at every sample for the mode ``schedule`` puts in force; a mode
-    that moves by more than ``resolution`` (relative frequency, absolute damping ratio) re-designs it."""
+    that moves by more than ``resolution`` (relative frequency, absolute damping ratio) re-designs it.
+
+    Examples
+    --------
+    >>> undamped = Schedule((0.0, 1.0), (25.0, 25.0), (0.0, 0.0))
+    >>> ScheduledShaper(undamped, ts=1e-3).design_at(0.5)  # ZV, zeta 0: two halves half a period apart
+    ImpulseShaper(times=(0.0, 0.02), amplitudes=(0.5, 0.5))
+    """
 
     schedule: Schedule
     ts: float

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from shapefmu.runtime import time_frequency
+from shapefmu.runtime.units import RadPerSecond
 from shapefmu.shapers.profile import MotionProfile, from_acceleration
 from shapefmu.shapers.sampled import SampledShaper
 
@@ -29,6 +30,12 @@ def phi(t, n: float) -> np.ndarray:
     """phi_n(t) = -t exp(-2^{2n} t^2 / 2) (paper 004, eq. 12); n = 0 is eq. (9).
 
     Its minimum -e^{-1/2} / 2^n sits at t_m = 2^{-n}, and |Phi_n| peaks at omega_m = 2^n (eq. 13).
+
+    Examples
+    --------
+    >>> import math
+    >>> math.isclose(float(phi(0.5, 1)), -math.exp(-0.5) / 2)  # the minimum of phi_1, at t = 1/2
+    True
     """
     t = np.asarray(t, dtype=float)
     return -t * np.exp(-0.5 * 4.0**n * t * t)
@@ -39,16 +46,30 @@ def sampled_phi(n: float, ts: float, move_time: float) -> np.ndarray:
 
     Antisymmetric about M/2, so it sums to zero: as an acceleration it brings the velocity back
     to rest.
+
+    Examples
+    --------
+    >>> g = sampled_phi(11.4, 2e-5, 2.5e-3)  # M = 125: samples k = 0..125
+    >>> g.size, abs(float(g.sum())) < 1e-15
+    (126, True)
     """
     return np.array(time_frequency.sampled_phi(n, ts, move_time))
 
 
 def scale_bounds(ts: float, move_time: float) -> tuple[float, float]:
-    """Default search interval of n: the peak time t_m = 2^{-n} between one sample and half the move."""
+    """Default search interval of n: the peak time t_m = 2^{-n} between one sample and half the move.
+
+    Examples
+    --------
+    >>> import math
+    >>> low, high = scale_bounds(2e-5, 2.5e-3)  # 2^-n from half the move to one sample
+    >>> math.isclose(low, math.log2(2 / 2.5e-3)), math.isclose(high, math.log2(1 / 2e-5))
+    (True, True)
+    """
     return time_frequency.scale_bounds(ts, move_time)
 
 
-def energy_leakage(n: float, first_resonance: float, ts: float, move_time: float) -> float:
+def energy_leakage(n: float, first_resonance: RadPerSecond, ts: float, move_time: float) -> float:
     """1 - J (paper 004, eq. 18-19): share of the energy of g_{phi,n} above omega_0 = Omega_0 Ts.
 
     Parameters
@@ -66,22 +87,40 @@ def energy_leakage(n: float, first_resonance: float, ts: float, move_time: float
     -----
     The integrals of eq. (18) are evaluated exactly (see ``shapefmu.runtime.time_frequency._leakage``),
     not by a cumulative sum.
+
+    Examples
+    --------
+    >>> f"{energy_leakage(11.4, 9.68e3, 2e-5, 2.5e-3):.3e}"  # paper 004's hard-disk case, Fig. 12
+    '2.070e-05'
     """
     return time_frequency.energy_leakage(n, first_resonance, ts, move_time)
 
 
-def optimal_scale(first_resonance: float, ts: float, move_time: float, bounds=None) -> tuple[float, float]:
+def optimal_scale(first_resonance: RadPerSecond, ts: float, move_time: float, bounds=None) -> tuple[float, float]:
     """The n minimising 1 - J (eq. 20) by bounded scalar minimisation, and that minimum.
 
     ``bounds`` defaults to :func:`scale_bounds`. The paper uses Matlab's ``fminbnd``; this is
     ``shapefmu.runtime.scalar_search.minimize_bounded`` (n to 1e-6), the same Brent-on-an-interval
     method as ``fminbnd`` and ``scipy.optimize.minimize_scalar(method='bounded')``.
+
+    Examples
+    --------
+    >>> n, leakage = optimal_scale(9.68e3, 2e-5, 2.5e-3)
+    >>> round(n, 2), f"{leakage:.3e}"
+    (11.41, '2.023e-05')
     """
     return time_frequency.optimal_scale(first_resonance, ts, move_time, bounds)
 
 
-def tradeoff_curve(first_resonance: float, ts: float, move_times) -> tuple[np.ndarray, np.ndarray]:
-    """Optimal n and minimal 1 - J against move time (paper 004, Fig. 13)."""
+def tradeoff_curve(first_resonance: RadPerSecond, ts: float, move_times) -> tuple[np.ndarray, np.ndarray]:
+    """Optimal n and minimal 1 - J against move time (paper 004, Fig. 13).
+
+    Examples
+    --------
+    >>> n, leakage = tradeoff_curve(9.68e3, 2e-5, [2.5e-3, 5e-3])  # a longer move leaks less
+    >>> [round(float(x), 2) for x in n], bool(leakage[1] < leakage[0])
+    ([11.41, 10.93], True)
+    """
     pairs = [optimal_scale(first_resonance, ts, mt) for mt in np.atleast_1d(move_times)]
     n, leak = np.array(pairs).T
     return n, leak
@@ -89,7 +128,14 @@ def tradeoff_curve(first_resonance: float, ts: float, move_times) -> tuple[np.nd
 
 @dataclass(frozen=True)
 class TimeFrequencyProfile:
-    """A paper-004 design: the scale n, its energy leakage 1 - J and the rest-to-rest profile."""
+    """A paper-004 design: the scale n, its energy leakage 1 - J and the rest-to-rest profile.
+
+    Examples
+    --------
+    >>> design = time_frequency_profile(9.68e3, 2e-5, 2.5e-3, 1.0)
+    >>> round(design.profile.distance, 9), abs(float(design.profile.velocity[-1])) < 1e-9  # at rest at the end
+    (1.0, True)
+    """
 
     n: float
     leakage: float
@@ -98,7 +144,7 @@ class TimeFrequencyProfile:
 
 
 def time_frequency_profile(
-    first_resonance: float, ts: float, move_time: float, distance: float, n=None, *, bounds=None
+    first_resonance: RadPerSecond, ts: float, move_time: float, distance: float, n=None, *, bounds=None
 ) -> TimeFrequencyProfile:
     """Rest-to-rest move over ``distance`` with acceleration K g_{phi,n}[k] (paper 004, eq. 15).
 

@@ -47,6 +47,7 @@ import numpy as np
 
 from shapefmu.runtime import twin_pulse
 from shapefmu.runtime.checks import check_count, check_positive
+from shapefmu.runtime.units import RadPerSecond
 from shapefmu.shapers.profile import MotionProfile
 from shapefmu.shapers.sampled import SampledShaper
 
@@ -77,6 +78,12 @@ class TwinPulseProfile(twin_pulse.TwinPulseTiming):
         Length of the whole move, t_tp + t_bc + t_tz, s.
 
     The timing fields are those of ``shapefmu.runtime.twin_pulse.TwinPulseTiming``, declared once.
+
+    Examples
+    --------
+    >>> d = bc_tz(3.5, 1.7, 0.7, ts=0.01)
+    >>> d.kind, round(d.kernel_length, 6), round(d.profile.distance, 9)  # the move covers d
+    ('BC:TZ', 1.795196, 1.7)
     """
 
     profile: MotionProfile
@@ -86,18 +93,18 @@ class TwinPulseProfile(twin_pulse.TwinPulseTiming):
         """Length of TP * BC (eq. 4, 7, 8); add t_tz for the whole move (eq. 12, 15, 16, 20, 21)."""
         return self.t_tp + self.t_bc
 
-    def spectrum(self, omega) -> np.ndarray:
+    def spectrum(self, omega: RadPerSecond) -> np.ndarray:
         """Acceleration spectrum per unit slew speed, TP(w) BC(w) TZ(w), exact and vectorised."""
         w = np.asarray(omega, dtype=float)
         return _tp(w, self.t_tp) * _bc(w, self.t_bc) * _tz(w, self.t_tz)
 
-    def magnitude(self, omega) -> np.ndarray:
+    def magnitude(self, omega: RadPerSecond) -> np.ndarray:
         """The paper's normalised magnitude: |TP BC| (and |TZ| / 2 where a trapezoid is aligned)."""
         w = np.asarray(omega, dtype=float)
         m = np.abs(_tp(w, self.t_tp) * _bc(w, self.t_bc))
         return m * np.abs(_tz(w, self.t_tz)) / 2.0 if self.trapezoid_aligned else m
 
-    def residual_swing(self, omega, gravity: float = 9.81) -> np.ndarray:
+    def residual_swing(self, omega: RadPerSecond, gravity: float = 9.81) -> np.ndarray:
         """Swing amplitude (rad) left on a linearised pendulum of natural frequency ``omega``.
 
         theta'' + omega^2 theta = -a(t) / L with L = gravity / omega^2; after the move the swing
@@ -163,7 +170,7 @@ def _sample(t_tp, t_bc, t_tz, slew, ts, kernel):
 # --- designs: one function per profile, signature (omega_n, distance, speed, *, ...) -----------
 
 
-def tp(omega_n, distance, speed, *, ts=None, pulse_width=None) -> TwinPulseProfile:
+def tp(omega_n: RadPerSecond, distance, speed, *, ts=None, pulse_width=None) -> TwinPulseProfile:
     """Classic twin pulse (Starr): impulses pi / omega_n apart, t_TZ = d / v (paper 003, Fig. 1, 13).
 
     Parameters
@@ -183,67 +190,132 @@ def tp(omega_n, distance, speed, *, ts=None, pulse_width=None) -> TwinPulseProfi
     Returns
     -------
     TwinPulseProfile
+
+    Examples
+    --------
+    >>> d = tp(3.5, 1.7, 0.7)  # paper 003's pendula: t_TP = pi / omega_n, t_TZ = d / v
+    >>> math.isclose(d.t_tp, math.pi / 3.5), math.isclose(d.t_tz, 1.7 / 0.7)
+    (True, True)
     """
     return _design("TP", omega_n, distance, speed, None, None, ts, pulse_width=pulse_width)
 
 
-def tp_bc(omega_n, distance, speed, *, null=2, ts=None) -> TwinPulseProfile:
+def tp_bc(omega_n: RadPerSecond, distance, speed, *, null=2, ts=None) -> TwinPulseProfile:
     """Twin pulse with its null ``null`` = k aligned on a boxcar's first null (eq. 1-4).
 
     t_BC = 2 pi / omega_n (eq. 2), t_TP = (2k - 1) pi / omega_n (eq. 3), kernel (2k + 1) pi /
     omega_n (eq. 4). Other parameters as :func:`tp`.
+
+    Examples
+    --------
+    >>> d = tp_bc(3.5, 1.7, 0.7)  # k = 2: t_TP = 3 pi / omega_n, t_BC = 2 pi / omega_n
+    >>> math.isclose(d.t_tp, 3 * math.pi / 3.5), math.isclose(d.t_bc, 2 * math.pi / 3.5), float(d.magnitude(3.5)) < 1e-15
+    (True, True, True)
     """
     return _design("TP:BC", omega_n, distance, speed, None, None, ts, tp_null=check_count(null, "null", 1))
 
 
-def m_tp_bc(omega_n, distance, speed, *, delta_omega=None, attenuation=None, ts=None) -> TwinPulseProfile:
+def m_tp_bc(omega_n: RadPerSecond, distance, speed, *, delta_omega: RadPerSecond | None = None, attenuation=None, ts=None) -> TwinPulseProfile:
     """Mis-aligned TP:BC, twin pulse null at omega_n - delta_omega, boxcar at + (eq. 5, 7).
 
     Give ``delta_omega`` (rad/s, in [0, omega_n)) or ``attenuation`` (the magnitude at omega_n, in
     (0, 1)) to find it by bisection (section III-C). Other parameters as :func:`tp`.
+
+    Examples
+    --------
+    >>> d = m_tp_bc(3.5, 1.7, 0.7, delta_omega=0.2)
+    >>> math.isclose(d.t_tp, math.pi / 3.3), math.isclose(d.t_bc, 2 * math.pi / 3.7)
+    (True, True)
     """
     return _design("M-TP:BC", omega_n, distance, speed, delta_omega, attenuation, ts)
 
 
-def m_bc_tp(omega_n, distance, speed, *, delta_omega=None, attenuation=None, ts=None) -> TwinPulseProfile:
-    """Mis-aligned BC:TP, boxcar null at omega_n - delta_omega, twin pulse at + (eq. 6, 8)."""
+def m_bc_tp(omega_n: RadPerSecond, distance, speed, *, delta_omega: RadPerSecond | None = None, attenuation=None, ts=None) -> TwinPulseProfile:
+    """Mis-aligned BC:TP, boxcar null at omega_n - delta_omega, twin pulse at + (eq. 6, 8).
+
+    Examples
+    --------
+    >>> d = m_bc_tp(3.5, 1.7, 0.7, delta_omega=0.2)
+    >>> math.isclose(d.t_bc, 2 * math.pi / 3.3), math.isclose(d.t_tp, math.pi / 3.7)
+    (True, True)
+    """
     return _design("M-BC:TP", omega_n, distance, speed, delta_omega, attenuation, ts)
 
 
-def bc_vr(omega_n, distance, speed, *, ts=None) -> TwinPulseProfile:
-    """Boxcar / velocity ramp: one boxcar of 2 pi / omega_n, acceleration v omega_n / 2 pi (eq. 9-11)."""
+def bc_vr(omega_n: RadPerSecond, distance, speed, *, ts=None) -> TwinPulseProfile:
+    """Boxcar / velocity ramp: one boxcar of 2 pi / omega_n, acceleration v omega_n / 2 pi (eq. 9-11).
+
+    Examples
+    --------
+    >>> d = bc_vr(3.5, 1.7, 0.7)
+    >>> math.isclose(d.t_bc, 2 * math.pi / 3.5), d.t_tp, float(d.magnitude(3.5)) < 1e-15
+    (True, 0.0, True)
+    """
     return _design("BC:VR", omega_n, distance, speed, None, None, ts)
 
 
-def bc_tz(omega_n, distance, speed, *, ts=None) -> TwinPulseProfile:
-    """Boxcar / trapezoid with nulls aligned at omega_n: k by eq. (13), slew speed by eq. (14)."""
+def bc_tz(omega_n: RadPerSecond, distance, speed, *, ts=None) -> TwinPulseProfile:
+    """Boxcar / trapezoid with nulls aligned at omega_n: k by eq. (13), slew speed by eq. (14).
+
+    Examples
+    --------
+    >>> d = bc_tz(3.5, 1.7, 0.7)  # k = 2: t_TZ = 2 pi k / omega_n, slew d / t_TZ
+    >>> d.null, math.isclose(d.t_tz, 4 * math.pi / 3.5), math.isclose(d.slew_speed, 1.7 / d.t_tz)
+    (2, True, True)
+    """
     return _design("BC:TZ", omega_n, distance, speed, None, None, ts)
 
 
-def m_bc_tz(omega_n, distance, speed, *, delta_omega=None, attenuation=None, ts=None) -> TwinPulseProfile:
+def m_bc_tz(omega_n: RadPerSecond, distance, speed, *, delta_omega: RadPerSecond | None = None, attenuation=None, ts=None) -> TwinPulseProfile:
     """Mis-aligned BC:TZ: boxcar at omega_n - delta_omega, trapezoid at + (eq. 15, 18).
 
     k = ceil(d (omega_n + delta_omega) / (2 pi v)), the analogue of eq. (17) for this ordering.
+
+    Examples
+    --------
+    >>> d = m_bc_tz(3.5, 1.7, 0.7, delta_omega=0.2)  # k = ceil(1.7 * 3.7 / (2 pi 0.7)) = 2
+    >>> d.null, math.isclose(d.t_bc, 2 * math.pi / 3.3), math.isclose(d.t_tz, 4 * math.pi / 3.7)
+    (2, True, True)
     """
     return _design("M-BC:TZ", omega_n, distance, speed, delta_omega, attenuation, ts)
 
 
-def m_tz_bc(omega_n, distance, speed, *, delta_omega=None, attenuation=None, ts=None) -> TwinPulseProfile:
-    """Mis-aligned TZ:BC: trapezoid at omega_n - delta_omega, boxcar at + (eq. 16, 17, 19)."""
+def m_tz_bc(omega_n: RadPerSecond, distance, speed, *, delta_omega: RadPerSecond | None = None, attenuation=None, ts=None) -> TwinPulseProfile:
+    """Mis-aligned TZ:BC: trapezoid at omega_n - delta_omega, boxcar at + (eq. 16, 17, 19).
+
+    Examples
+    --------
+    >>> d = m_tz_bc(3.5, 1.7, 0.7, delta_omega=0.2)
+    >>> math.isclose(d.t_bc, 2 * math.pi / 3.7), math.isclose(d.t_tz, 2 * math.pi * d.null / 3.3)
+    (True, True)
+    """
     return _design("M-TZ:BC", omega_n, distance, speed, delta_omega, attenuation, ts)
 
 
-def m_bc_tz_tp(omega_n, distance, speed, *, delta_omega=None, attenuation=None, ts=None) -> TwinPulseProfile:
+def m_bc_tz_tp(omega_n: RadPerSecond, distance, speed, *, delta_omega: RadPerSecond | None = None, attenuation=None, ts=None) -> TwinPulseProfile:
     """Boxcar at omega_n - delta_omega, trapezoid at omega_n (k by eq. 13), twin pulse at + (sect. III-G).
 
     The profile of the ten-pendula experiment (section IV). Its length is eq. (21)'s expression,
     see the module docstring.
+
+    Examples
+    --------
+    >>> d = m_bc_tz_tp(3.5, 1.7, 0.7, delta_omega=0.2)  # the trapezoid keeps omega_n's null
+    >>> float(d.magnitude(3.5)) < 1e-15, d.null
+    (True, 2)
     """
     return _design("M-BC:TZ:TP", omega_n, distance, speed, delta_omega, attenuation, ts)
 
 
-def m_tp_tz_bc(omega_n, distance, speed, *, delta_omega=None, attenuation=None, ts=None) -> TwinPulseProfile:
-    """Twin pulse at omega_n - delta_omega, trapezoid at omega_n, boxcar at + (sect. III-G, eq. 22)."""
+def m_tp_tz_bc(omega_n: RadPerSecond, distance, speed, *, delta_omega: RadPerSecond | None = None, attenuation=None, ts=None) -> TwinPulseProfile:
+    """Twin pulse at omega_n - delta_omega, trapezoid at omega_n, boxcar at + (sect. III-G, eq. 22).
+
+    Examples
+    --------
+    >>> d = m_tp_tz_bc(3.5, 1.7, 0.7, delta_omega=0.2)
+    >>> math.isclose(d.t_tp, math.pi / 3.3), math.isclose(d.t_bc, 2 * math.pi / 3.7), float(d.magnitude(3.5)) < 1e-15
+    (True, True, True)
+    """
     return _design("M-TP:TZ:BC", omega_n, distance, speed, delta_omega, attenuation, ts)
 
 

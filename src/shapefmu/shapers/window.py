@@ -24,6 +24,7 @@ import numpy as np
 
 from shapefmu.runtime import window_filters
 from shapefmu.runtime.checks import check_count
+from shapefmu.runtime.units import RadPerSecond
 from shapefmu.runtime.window_filters import cosine_base, damped_mode
 from shapefmu.shapers.sampled import SampledShaper
 
@@ -51,7 +52,7 @@ def _sampled(design, order):
 # --- designs ---------------------------------------------------------------------------------
 
 
-def rectangle_filter(omega_n, zeta, ts, order=1, *, adjust_ts=False) -> SampledShaper:
+def rectangle_filter(omega_n: RadPerSecond, zeta, ts, order=1, *, adjust_ts=False) -> SampledShaper:
     """Rectangle-window shape filter: M equal samples, M = 2 pi / (omega_d Ts).
 
     Parameters
@@ -85,14 +86,13 @@ def rectangle_filter(omega_n, zeta, ts, order=1, *, adjust_ts=False) -> SampledS
 
     Examples
     --------
-    >>> import math
-    >>> rectangle_filter(1.0, 0.0, math.pi / 100).taps.size
+    >>> rectangle_filter(1.0, 0.0, np.pi / 100).taps.size
     200
     """
     return _sampled(window_filters.rectangle_filter(omega_n, zeta, ts, adjust_ts=adjust_ts), order)
 
 
-def hanning_filter(omega_n, zeta, ts, order=1, *, adjust_ts=False) -> SampledShaper:
+def hanning_filter(omega_n: RadPerSecond, zeta, ts, order=1, *, adjust_ts=False) -> SampledShaper:
     """Hanning-window shape filter, M = 4 pi / (omega_d Ts) (paper 000, eq. 2, section 3).
 
     Parameters are those of :func:`rectangle_filter`.
@@ -108,14 +108,13 @@ def hanning_filter(omega_n, zeta, ts, order=1, *, adjust_ts=False) -> SampledSha
 
     Examples
     --------
-    >>> import math
-    >>> hanning_filter(1.0, 0.0, math.pi / 100).taps.size  # M + 1 with M = 400
+    >>> hanning_filter(1.0, 0.0, np.pi / 100).taps.size  # M + 1 with M = 400
     401
     """
     return _sampled(window_filters.hanning_filter(omega_n, zeta, ts, adjust_ts=adjust_ts), order)
 
 
-def blackman_filter(omega_n, zeta, ts, order=1, *, adjust_ts=False) -> SampledShaper:
+def blackman_filter(omega_n: RadPerSecond, zeta, ts, order=1, *, adjust_ts=False) -> SampledShaper:
     """Blackman-window shape filter, M = 6 pi / (omega_d Ts) (paper 000, section 4).
 
     Parameters are those of :func:`rectangle_filter`.
@@ -129,11 +128,16 @@ def blackman_filter(omega_n, zeta, ts, order=1, *, adjust_ts=False) -> SampledSh
     References
     ----------
     Paper 000, section 4.
+
+    Examples
+    --------
+    >>> blackman_filter(1.0, 0.0, np.pi / 100).taps.size  # M + 1 with M = 600
+    601
     """
     return _sampled(window_filters.blackman_filter(omega_n, zeta, ts, adjust_ts=adjust_ts), order)
 
 
-def hamming_filter(omega_n, zeta, ts, order=1, *, adjust_ts=False) -> SampledShaper:
+def hamming_filter(omega_n: RadPerSecond, zeta, ts, order=1, *, adjust_ts=False) -> SampledShaper:
     """Hamming-window shape filter with an approximate null, M = 4 pi / (omega_d Ts) (section 5).
 
     Parameters are those of :func:`rectangle_filter`. The residual vibration at the design point is
@@ -148,15 +152,25 @@ def hamming_filter(omega_n, zeta, ts, order=1, *, adjust_ts=False) -> SampledSha
     References
     ----------
     Paper 000, section 5.
+
+    Examples
+    --------
+    >>> hamming_filter(1.0, 0.0, np.pi / 100).taps.size  # M + 1 with M = 400
+    401
     """
     return _sampled(window_filters.hamming_filter(omega_n, zeta, ts, adjust_ts=adjust_ts), order)
 
 
-def hamming_null_depth(omega_n, zeta, ts, *, adjust_ts=False) -> float:
+def hamming_null_depth(omega_n: RadPerSecond, zeta, ts, *, adjust_ts=False) -> float:
     """|H(omega_d Ts)| / H(0) of the Hamming base window: how far its approximate null is from 0.
 
     Equals 4 / (25 M + 4) (see :func:`hamming_filter`); for zeta = 0 this is also the percent
     residual vibration of the order-1 Hamming filter at the design point.
+
+    Examples
+    --------
+    >>> round(hamming_null_depth(1.0, 0.0, np.pi / 100) * (25 * 400 + 4), 9)  # 4 / (25 M + 4), M = 400
+    4.0
     """
     _, _, omega_d = damped_mode(omega_n, zeta)
     h, ts = cosine_base("hamming", omega_d, ts, adjust_ts)
@@ -165,7 +179,7 @@ def hamming_null_depth(omega_n, zeta, ts, *, adjust_ts=False) -> float:
     return float(abs(np.sum(h * np.exp(-1j * omega_d * ts * k))) / h.sum())
 
 
-def three_hanning_filter(omega_n, zeta, ts, order=1, *, c=0.25, adjust_ts=False) -> SampledShaper:
+def three_hanning_filter(omega_n: RadPerSecond, zeta, ts, order=1, *, c=0.25, adjust_ts=False) -> SampledShaper:
     """Shape filter from the sum of three Hanning windows with weight C (paper 000, section 7, eq. 6).
 
     Parameters are those of :func:`rectangle_filter`, plus
@@ -183,13 +197,19 @@ def three_hanning_filter(omega_n, zeta, ts, order=1, *, c=0.25, adjust_ts=False)
     References
     ----------
     Paper 000, section 7, eq. (6).
+
+    Examples
+    --------
+    >>> f = three_hanning_filter(2 * np.pi * 10.0, 0.0, 1e-3, adjust_ts=True)  # M whole: Ts moves
+    >>> f.taps.size, round(f.ts, 9), round(f.gain, 12)
+    (159, 0.001000721, 1.0)
     """
     design = window_filters.three_hanning_filter(omega_n, zeta, ts, c=c, adjust_ts=adjust_ts)
     return _sampled(design, order)
 
 
 def differenced_filter(
-    omega_n, zeta, ts, order=1, *, k1=1.0, k2=-25.0, base="hanning", adjust_ts=False
+    omega_n: RadPerSecond, zeta, ts, order=1, *, k1=1.0, k2=-25.0, base="hanning", adjust_ts=False
 ) -> SampledShaper:
     """Non-symmetric shape filter h = k1 g + k2 dg from a base and its difference (section 8.1).
 
@@ -209,13 +229,19 @@ def differenced_filter(
     References
     ----------
     Paper 000, section 8.1, Figs. 8-9.
+
+    Examples
+    --------
+    >>> f = differenced_filter(1.0, 0.0, np.pi / 100)  # M + 2 samples, M = 400
+    >>> f.taps.size, round(f.gain, 12)
+    (402, 1.0)
     """
     design = window_filters.differenced_filter(omega_n, zeta, ts, k1=k1, k2=k2, base=base, adjust_ts=adjust_ts)
     return _sampled(design, order)
 
 
 def convolved_filter(
-    omega_n, zeta, ts, order=1, *, k1=1.0, k2=1.0 / 125.0, k0=None, base="hanning", adjust_ts=False
+    omega_n: RadPerSecond, zeta, ts, order=1, *, k1=1.0, k2=1.0 / 125.0, k0=None, base="hanning", adjust_ts=False
 ) -> SampledShaper:
     """Non-symmetric shape filter h = k1 g[k - k0] + k2 (g * g)[k] (paper 000, section 8.2).
 
@@ -236,6 +262,12 @@ def convolved_filter(
     References
     ----------
     Paper 000, section 8.2, Figs. 10-11.
+
+    Examples
+    --------
+    >>> f = convolved_filter(1.0, 0.0, np.pi / 100)  # spans 0..2M, M = 400
+    >>> f.taps.size, round(f.gain, 12)
+    (801, 1.0)
     """
     design = window_filters.convolved_filter(
         omega_n, zeta, ts, k1=k1, k2=k2, k0=k0, base=base, adjust_ts=adjust_ts
@@ -243,6 +275,42 @@ def convolved_filter(
     return _sampled(design, order)
 
 
-#: Design functions by kind, for the command line (``shapefmu design KIND``): the kinds of the
-#: runtime's table (what the ShapeFilter FMU's ``kind`` selects), each with its namesake here.
+#: Design functions by kind: the kinds of the runtime's table (what the ShapeFilter FMU's ``kind``
+#: selects), each with its namesake here. ``get_window`` is the way to them by name.
 WINDOW_FILTERS = {kind: globals()[runtime.__name__] for kind, runtime in window_filters.WINDOW_FILTERS.items()}
+
+
+def get_window(kind, omega_n: RadPerSecond, zeta, ts, order=1, **options) -> SampledShaper:
+    """The window shape filter ``kind`` for the mode (``omega_n`` rad/s, ``zeta``) sampled at ``ts`` s,
+    as scipy.signal.get_window returns a window by name.
+
+    Parameters
+    ----------
+    kind : str
+        One of ``WINDOW_FILTERS``: rectangle, hanning, blackman, hamming, three-hanning,
+        differenced, convolved.
+    omega_n, zeta, ts, order
+        As :func:`rectangle_filter`: natural frequency (rad/s), damping ratio, sampling period (s),
+        robustness order.
+    **options
+        The kind's own keywords: ``adjust_ts`` for every kind, ``c`` for three-hanning, ``k1``,
+        ``k2``, ``base`` (and ``k0``) for differenced and convolved.
+
+    Returns
+    -------
+    SampledShaper
+        The filter's taps summing to 1 and the ts used.
+
+    Examples
+    --------
+    >>> window = get_window("hanning", 2 * np.pi * 10.0, 0.0, 1e-3)  # a 10 Hz mode, 1 kHz
+    >>> window.taps.size, round(float(window.taps.sum()), 12)
+    (201, 1.0)
+    >>> get_window("kaiser", 1.0, 0.0, 0.01)
+    Traceback (most recent call last):
+    ...
+    ValueError: kind must be one of rectangle, hanning, blackman, hamming, three-hanning, differenced, convolved, got 'kaiser'
+    """
+    if kind not in WINDOW_FILTERS:
+        raise ValueError(f"kind must be one of {', '.join(WINDOW_FILTERS)}, got {kind!r}")
+    return WINDOW_FILTERS[kind](omega_n, zeta, ts, order, **options)

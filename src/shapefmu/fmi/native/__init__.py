@@ -1,5 +1,5 @@
-"""Native C FMUs: the generic FMI 2.0 layer (``c/``), the plant-FMU generator and the native C
-twins of the pythonfmu FMUs (``twins``: the Shaper and ShapeFilter of ``sampled``, the EKF tuner of
+"""Native C FMUs: the generic FMI layers (``c/``), the plant-FMU generator and the native C
+twins of the FMU kinds (``twins``: the Shaper and ShapeFilter of ``sampled``, the EKF tuner of
 ``ekf_tuner``, the STOS controller of ``stos``, the profile generator of ``profiles`` and the
 reference player of ``reference``, each packaged by ``kernel_fmu``).
 
@@ -21,10 +21,12 @@ for nonlinear plants; variable communication steps). It carries its C sources an
 recompile it, and ``binaries/linux64``, ``binaries/win64`` and ``binaries/aarch64-linux`` compiled
 here (``compile.py``: gcc, and the mingw-w64 and aarch64 cross compilers where they are installed).
 
-Structure (as the FMI Reference FMUs): ``c/fmi2_layer*.c`` is the one hand-written, tested generic
-FMI 2.0 layer shared by every native FMU (``c/fmi2_model.h`` is its model interface);
-``c/plant_fmi2.c`` is the plants' part behind it (zero-order hold, RK4, Jacobians, parameter
-constraints, against ``c/plant_model.h``); the generator writes only the model part (``model.c``:
+Structure (as the FMI Reference FMUs): ``c/fmi2_layer*.c`` and ``c/fmi3_layer*.c`` are the
+hand-written, tested generic layers of FMI 2.0 and 3.0 shared by every native FMU, over
+``c/layer_core.c``; ``c/model.h`` is the version-neutral contract with a model part, whose hooks the
+layer defaults where a part gives none; ``c/plant_part.c`` is the plants' part (zero-order hold,
+RK4, Jacobians, parameter constraints, against ``c/plant_model.h``); the generator writes only the
+model of one plant (``model.c``:
 sizes, names, start values, parameter constraints; ``plant_casadi.c``: f, g and their Jacobians
 from CasADi).
 
@@ -37,6 +39,11 @@ Variable names (``variableNamingConvention="structured"``), stable for SSP param
   ``C[i,j]``, ``D[i,j]``; a nonlinear plant also has ``substep`` (s, the longest RK4 substep);
 - states: ``state.<name>`` with the plant's state names (``state.x_r``, ``state.v_f1``; a
   transfer function's realisation has ``state.x_1`` ...), derivatives ``der(state.<name>)``.
+
+Every variable is described: a state by what it is in the plant's kind (``state.x_f1``: deflection of
+flexible mode 1), an input, output or parameter as its model file describes it (or by its name); every
+unit with its SI base unit; an input's limit |u| <= U as min -U, max U. The DefaultExperiment runs
+ten periods of the slowest mode, and the icon draws the plant's resonances.
 
 Parameters are ``tunable`` (settable between Co-Simulation steps and in Model Exchange event mode;
 the zero-order-hold matrices are recomputed), except a transfer function's ``num`` and ``den``,

@@ -3,16 +3,20 @@
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 import importlib.util
 import os
 import re
 import sys
 import tempfile
 import tomllib
+import uuid
 from pathlib import Path
 
+from shapefmu import __version__
+from shapefmu.fmi.description import ModelDescription, fmi2, fmi3, now, write
 from shapefmu.fmi.documentation import add_documentation
-from shapefmu.fmi.native import description, description3, linear
+from shapefmu.fmi.native import linear
 from shapefmu.fmi.native.codegen import write_sources
 from shapefmu.fmi.native.compile import build_binaries, build_description, copy_c_files, write_layer, zip_fmu
 from shapefmu.fmi.native.model_part import ModelPart, check_name
@@ -22,7 +26,7 @@ from shapefmu.runtime.checks import check_size, read_text_file
 
 # The hand-written C shipped with every plant FMU (package data in fmi/native/c/) besides the generic
 # layer of its FMI version: the plants' model part.
-PLANT_SOURCES = ("plant_fmi2.c", "plant_expm.c")
+PLANT_SOURCES = ("plant_part.c", "plant_expm.c")
 PLANT_HEADERS = ("plant_model.h", "plant_expm.h")
 
 
@@ -34,10 +38,11 @@ def _from_model_file(path: Path, name: str | None) -> ModelPart:
     plant = as_plant(path)
     _check_states(plant.n_states, f"plant model {path}")
     data = tomllib.loads(read_text_file(path, "plant model"))  # as_plant read and checked it just now
-    units = {signal: fields.get("unit", "") for key in ("inputs", "outputs") for signal, fields in data[key].items()}
+    signals = {signal: fields for key in ("inputs", "outputs") for signal, fields in data[key].items()}
     descriptions = {key: raw.get("description", "") for key, raw in data["parameters"].items()}
-    return linear.model_part(plant, name=name, signal_units=units, descriptions=descriptions,
+    part = linear.model_part(plant, name=name, signals=signals, descriptions=descriptions,
                              description=data.get("description", ""))
+    return dataclasses.replace(part, source=data.get("source", ""))
 
 
 def to_model_part(model, name: str | None = None) -> ModelPart:
@@ -65,7 +70,7 @@ def _about(part: ModelPart) -> str:
     step = ("the exact zero-order-hold step of the linear system (its matrix exponential), so any "
             "communication step gives the sampled solution to rounding" if part.linear else
             f"fixed-substep RK4, the substep being the parameter {part.substep_parameter}")
-    return (f"{part.description or part.name}\n\n"
+    return (f"{part.description or part.name}{' (' + part.source + ')' if part.source else ''}\n\n"
             f"A plant model of shapefmu as a native C FMU: {len(part.states)} continuous states, inputs "
             f"{', '.join(s.name for s in part.inputs) or 'none'}, outputs {', '.join(s.name for s in part.outputs)}. "
             f"Model Exchange gives the host the state derivatives; Co-Simulation steps with {step}. "
@@ -85,7 +90,7 @@ def build_plant_fmu(model, out_path, *, name: str | None = None, fmi_version: st
     if out_path.is_dir():
         raise ValueError(f"out_path {str(out_path)!r} is a folder; give the FMU file to write, e.g. {out_path / 'Plant.fmu'}")
     part = to_model_part(model, name)
-    identifier = description.model_identifier(part)
+    identifier = part.identifier
     with tempfile.TemporaryDirectory(prefix="shapefmu_plant_") as tmp:
         root = Path(tmp)
         sources = root / "sources"
@@ -95,33 +100,46 @@ def build_plant_fmu(model, out_path, *, name: str | None = None, fmi_version: st
         # The GUID hashes the sources, which include the GUID: generate with a placeholder first.
         generated = write_sources(part, "", sources)
         c_files = [*wrapper_sources, *generated]
-        guid = description.guid_of(part, {f: (sources / f).read_text(encoding="utf-8") for f in c_files})
+        guid = _guid(part, {f: (sources / f).read_text(encoding="utf-8") for f in c_files})
         write_sources(part, guid, sources)
         (sources / "buildDescription.xml").write_text(build_description(identifier, c_files), encoding="utf-8")
         note = build_binaries(root, identifier, c_files, f"plant {part.name}", fmi_version)
         if note:
             print(note, file=sys.stderr)
-        if fmi_version == "2.0":
-            xml = description.model_description(part, guid, tuple(c_files))
-        else:
-            xml = _description3(part, identifier, guid)
-            # one input is the command the plant takes; several inputs are no one command
-            command = part.inputs[0].name if len(part.inputs) == 1 else None
+        description = _description(part, guid, tuple(c_files) if fmi_version == "2.0" else (), now())
+        (root / "modelDescription.xml").write_text(write(description, fmi_version), encoding="utf-8")
+        if fmi_version == "3.0":
+            interface = part.interface()
             (root / "terminalsAndIcons").mkdir()
             (root / "terminalsAndIcons" / "terminalsAndIcons.xml").write_text(
-                description3.terminals_and_icons(command, None), encoding="utf-8")
-        (root / "modelDescription.xml").write_text(xml, encoding="utf-8")
-        add_documentation(root, _about(part))
+                fmi3.terminals_and_icons(interface.command_in, interface.command_out), encoding="utf-8")
+        add_documentation(root, _about(part), part.picture())
         zip_fmu(root, out_path)
     return out_path
 
 
-def _description3(part: ModelPart, identifier: str, token: str) -> str:
-    return description3.model_description3(
-        model_name=part.name, identifier=identifier, token=token, description=part.description,
-        slots=description3.plant_slots(part), dependencies=description3.plant_dependencies(part),
-        log_categories=[(c, "") for c in description.LOG_CATEGORIES], model_exchange=True,
-        directional_derivatives=True, generation_tool="plant generator")
+LOG_CATEGORIES = (("logStatusError", ""), ("logAll", ""))
+
+
+def _description(part: ModelPart, guid: str, source_files: tuple[str, ...], date: str | None) -> ModelDescription:
+    """The model description of the plant FMU of ``part``: Model Exchange (with directional
+    derivatives from the Jacobians) and Co-Simulation, on the host's memory functions."""
+    interface = part.interface()
+    return ModelDescription(
+        model_name=part.name, identifier=part.identifier, guid=guid, description=part.description,
+        generation_tool=f"shapefmu {__version__} plant generator", variables=interface.variables,
+        dependencies=part.dependencies_by_name(), log_categories=LOG_CATEGORIES, generation_date=date,
+        experiment=part.experiment(), model_exchange=True, directional_derivatives=True, source_files=source_files,
+        designed=False)
+
+
+def _guid(part: ModelPart, sources: dict[str, str]) -> str:
+    """A GUID that changes whenever the model description (but its date) or any source changes."""
+    digest = hashlib.md5(fmi2.write(_description(part, "", (), None)).encode())
+    for name in sorted(sources):
+        digest.update(name.encode())
+        digest.update(sources[name].encode())
+    return "{" + str(uuid.UUID(digest.hexdigest())) + "}"
 
 
 def fmu_file_name(model_name: str) -> str:

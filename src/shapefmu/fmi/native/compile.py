@@ -40,7 +40,7 @@ from shapefmu.fmi.compiler import run_compiler
 # The generic FMI layers, one of them shipped in every native FMU's sources/: the version-neutral core
 # and the API of FMI 2.0 or 3.0 over it (layer_files).
 _CORE_SOURCES = ("layer_core.c", "layer_state.c", "fmu_liveness.c")
-_CORE_HEADERS = ("fmi2_model.h", "model_status.h", "layer_core.h", "fmu_liveness.h", "sample_clock.h")
+_CORE_HEADERS = ("model.h", "layer_core.h", "fmu_liveness.h", "sample_clock.h")
 LAYER_SOURCES = ("fmi2_layer.c", "fmi2_layer_me.c", *_CORE_SOURCES)
 LAYER_HEADERS = ("fmi2_layer.h", *_CORE_HEADERS)
 FMI_VERSIONS = ("2.0", "3.0")

@@ -1,13 +1,14 @@
 """The native C EKFTuner FMU: the pythonfmu EKFTuner's variables and numbers, no Python on the host.
 
 ``build_native_ekf_tuner(out_path, **start_values) -> Path`` writes an FMI 2.0 Co-Simulation FMU:
-the generic FMI 2.0 layer, the EKF tuner's model part (``c/ekf_tuner_fmi2.c``: runtime/ekf_tuner.py's
+the generic FMI 2.0 layer, the EKF tuner's model part (``c/ekf_tuner_part.c``: runtime/ekf_tuner.py's
 EKFTunedShaperKernel; ``c/resonance_ekf.c``: runtime/ekf.py's ResonanceEKF; operation for operation), the
 absolute sample grid (``c/sample_clock.c``), the closed-form designs (``c/shaper_designs.c``) and
 a generated ``model.c`` holding the variables and their start values. Nothing is designed at build
 time: every parameter is used at the exit of initialisation in closed form, so each may be set
-before it, as in the pythonfmu FMU. The start values are checked here by the pythonfmu slave's
-own initialisation; the C also refuses a zv_dn order above 62 (64 impulses).
+before it, as in the pythonfmu FMU. The start values are checked here by the kind's own
+initialisation (``shapefmu.fmi.kinds.ekf_tuner``, as the pythonfmu FMU's); the C also refuses a
+zv_dn order above 62 (64 impulses).
 """
 
 from __future__ import annotations
@@ -15,11 +16,10 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from shapefmu.fmi.native.kernel_fmu import number_by_type, twin_variables_c, write_native_fmu
-from shapefmu.fmi.python.builder import designed_slave
+from shapefmu.fmi.native.kernel_fmu import designed_twin, twin_variables_c, write_native_fmu
 
 NAME = "EKFTuner"
-SOURCES = ("ekf_tuner_fmi2.c", "resonance_ekf.c", "sample_clock.c", "shaper_designs.c", "twin_variables.c")
+SOURCES = ("ekf_tuner_part.c", "resonance_ekf.c", "sample_clock.c", "shaper_designs.c", "twin_variables.c")
 HEADERS = ("ekf_tuner_model.h", "resonance_ekf.h", "sample_clock.h", "shaper_designs.h", "twin_variables.h")
 MEANINGS = {"kind": "EKF_KIND", "n": "EKF_ORDER", "Ts": "EKF_PERIOD", "omega0": "EKF_OMEGA0",
             "amplitude": "EKF_AMPLITUDE", "retune_fraction": "EKF_RETUNE", "u": "EKF_COMMAND",
@@ -41,15 +41,13 @@ def _model_c(variables, values, guid) -> str:
 
 def build_native_ekf_tuner(out_path, *, fmi_version: str = "2.0", clock: bool = False, **start_values) -> Path:
     """Build the native EKFTuner FMU with ``start_values`` (parameters of the pythonfmu EKFTuner)."""
-    slave = designed_slave(NAME, start_values)
-    if slave.values["n"] > MAX_ORDER:
-        raise ValueError(f"n must be an integer in [0, {MAX_ORDER}] for the native EKFTuner, got {slave.values['n']}")
-    variables = number_by_type(slave.variables)
+    model, variables, values = designed_twin(NAME, start_values)
+    if values["n"] > MAX_ORDER:
+        raise ValueError(f"n must be an integer in [0, {MAX_ORDER}] for the native EKFTuner, got {values['n']}")
     if sorted(v.name for v in variables) != sorted(MEANINGS):
-        raise RuntimeError(f"the EKFTuner slave's variables {[v.name for v in variables]} are not those "
+        raise RuntimeError(f"the EKFTuner's variables {[v.name for v in variables]} are not those "
                            f"c/ekf_tuner_model.h knows: {list(MEANINGS)}")
-    values = dict(slave.values)
-    about = f"{sys.modules[type(slave).__module__].__doc__}\n\n{NATIVE_NOTE}"
-    return write_native_fmu(NAME, out_path, slave, variables, values, slave.output_dependencies(), SOURCES, HEADERS,
+    about = f"{sys.modules[type(model).__module__].__doc__}\n\n{NATIVE_NOTE}"
+    return write_native_fmu(NAME, out_path, model, variables, values, model.output_dependencies(), SOURCES, HEADERS,
                             lambda guid: _model_c(variables, values, guid), about, fmi_version=fmi_version,
                             clock=clock)

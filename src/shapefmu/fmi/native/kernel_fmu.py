@@ -1,9 +1,10 @@
-"""Package a native C twin of a pythonfmu FMU: the one place that turns a model part into an archive.
+"""Package a native C twin of an FMU kind: the one place that turns a model part into an archive.
 
 A native twin (the Shaper and ShapeFilter of ``sampled``, the EKF tuner of ``ekf_tuner``, ...) is
-the generic FMI 2.0 layer (``c/fmi2_layer*.c``), the model part's own C files and a generated
-``model.c`` (its variables' start values and what was designed at build time). Its
-modelDescription.xml is made from the pythonfmu slave's variables, so an SSP can bind either FMU.
+the generic FMI layer of its version (``c/fmi2_layer*.c`` or ``c/fmi3_layer*.c``), the model part's
+own C files and a generated ``model.c`` (its variables' start values and what was designed at build
+time). Its modelDescription.xml is written from the kind's interface (``shapefmu.fmi.kinds``), the
+one the pythonfmu FMU declares, so an SSP can bind either FMU.
 
 ``write_native_fmu`` copies the C files into ``sources/``, derives the GUID from all of them (the
 generated file included, written first without the GUID), writes ``buildDescription.xml``, compiles
@@ -18,28 +19,33 @@ import sys
 import tempfile
 import uuid
 from pathlib import Path
-from types import SimpleNamespace
 
+from shapefmu import __version__
+from shapefmu.fmi.description import ModelDescription, fmi3, now, write
 from shapefmu.fmi.documentation import add_documentation
-from shapefmu.fmi.native import description3
+from shapefmu.fmi.kinds import designed
 from shapefmu.fmi.native.compile import build_binaries, build_description, copy_c_files, write_layer, zip_fmu
-from shapefmu.fmi.python.model_description import model_description
-from shapefmu.fmi.python.slave_base import Variable
 
 MODEL_SOURCE = "model.c"
 TYPE_ORDER = ("Real", "Integer", "Boolean", "String")
 CATEGORIES = (("logStatusError", "Errors: bad parameters, non-finite inputs, calls out of order"),
               ("logAll", "Everything else (debug logging)"))
-ROLES = {("parameter", "fixed"): "FMI2_PARAMETER_FIXED", ("parameter", "tunable"): "FMI2_PARAMETER_TUNABLE",
-         ("input", "continuous"): "FMI2_INPUT", ("output", "continuous"): "FMI2_COMPUTED"}
+ROLES = {("parameter", "fixed"): "ROLE_PARAMETER_FIXED", ("parameter", "tunable"): "ROLE_PARAMETER_TUNABLE",
+         ("input", "continuous"): "ROLE_INPUT", ("output", "continuous"): "ROLE_COMPUTED"}
 
 
-def number_by_type(variables) -> list[Variable]:
-    """``variables`` renumbered as the generic layer indexes values (fmi2_model.h): Real, Integer,
-    Boolean, String, each in declaration order, value reference = position."""
-    ordered = sorted(variables, key=lambda v: TYPE_ORDER.index(v.type))
-    return [Variable(v.name, vr, v.type, v.causality, v.variability, v.start, v.unit, v.description, v.minimum,
-                     v.maximum) for vr, v in enumerate(ordered)]
+def number_by_type(variables) -> list:
+    """``variables`` in the order the generic layer indexes values (model.h): Real, Integer,
+    Boolean, String, each in declaration order; value reference = position."""
+    return sorted(variables, key=lambda v: TYPE_ORDER.index(v.type))
+
+
+def designed_twin(name: str, start_values: dict):
+    """(model, variables, values) of the native twin of kind ``name`` with ``start_values``: the kind's
+    model designed at build time, its variables numbered by type (``number_by_type``) and their values
+    (name -> value) after the design."""
+    model = designed(name, start_values)
+    return model, number_by_type(model.interface.variables), dict(model.values)
 
 
 def c_string(text: str) -> str:
@@ -56,20 +62,27 @@ def c_doubles(name: str, values) -> str:
     return f"static const double {name}[] = {{\n    {rows or '0.0'}\n}};"
 
 
-def twin_variables_c(table: str, variables, values: dict, meaning_of, guid: str) -> str:
-    """C of the TwinVariables ``table`` (``c/twin_variables.h``): each of the numbered ``variables``
-    with its role, its meaning ``meaning_of(name)`` (an enumerator of the model part) and its start
-    value from ``values``."""
+def variable_rows(variables, values: dict, meaning_of) -> str:
+    """The C rows of a VariableTable (``c/model.h``): each of the numbered ``variables`` with its role,
+    its meaning ``meaning_of(name)`` (an enumerator of the model part) and its start value from ``values``."""
     rows = []
     for var in variables:
         value = values[var.name]
         start, string = ("0.0", c_string(value)) if var.type == "String" else (repr(float(value)), "NULL")
         rows.append(f'    {{"{var.name}", {ROLES[(var.causality, var.variability)]}, {meaning_of(var.name)}, {start}, '
                     f'{string}}},')
-    counts = ", ".join(str(sum(v.type == t for v in variables)) for t in TYPE_ORDER)
-    body = "\n".join(rows)
-    return (f"static const TwinVariable {table}_rows[] = {{\n{body}\n}};\n\n"
-            f'const TwinVariables {table} = {{"{guid}", {counts}, {table}_rows}};\n')
+    return "\n".join(rows)
+
+
+def table_fields(variables, guid: str) -> str:
+    """The GUID and the counts of a VariableTable (``c/model.h``) of the numbered ``variables``."""
+    return f'"{guid}", ' + ", ".join(str(sum(v.type == t for v in variables)) for t in TYPE_ORDER)
+
+
+def twin_variables_c(table: str, variables, values: dict, meaning_of, guid: str) -> str:
+    """C of the VariableTable ``table`` of a twin's model part (``c/model.h``, ``c/twin_variables.h``)."""
+    return (f"static const VariableRow {table}_rows[] = {{\n{variable_rows(variables, values, meaning_of)}\n}};\n\n"
+            f"const VariableTable {table} = {{{table_fields(variables, guid)}, {table}_rows}};\n")
 
 
 def clock_interval(name: str, values: dict, fmi_version: str) -> float:
@@ -83,19 +96,19 @@ def clock_interval(name: str, values: dict, fmi_version: str) -> float:
     return float(period)
 
 
-def write_native_fmu(name: str, out_path, slave, variables, values: dict, dependencies: dict, c_sources,
+def write_native_fmu(name: str, out_path, model, variables, values: dict, dependencies: dict, c_sources,
                      c_headers, model_c, about: str, log_categories=CATEGORIES, fmi_version: str = "2.0",
                      clock: bool = False) -> Path:
     """Write the native FMU ``name`` to ``out_path`` and return the path.
 
-    ``slave`` is the designed pythonfmu slave (its description and DefaultExperiment); ``variables``
-    the numbered variables (``number_by_type``) with their start ``values`` (name -> value);
-    ``dependencies`` maps each output to the inputs it feeds through from; ``c_sources`` and
-    ``c_headers`` the model part's files of ``fmi/native/c`` (the generic layer is added here);
-    ``model_c(guid)`` the text of the generated model.c; ``about`` the documentation's account of
-    what the FMU does; ``fmi_version`` "2.0" or "3.0" picks the generic layer and the model description
-    (FMI 3.0: array parameters, see ``description3``); ``clock`` (FMI 3.0) declares the periodic input
-    clock of the sample period Ts (``c/fmi3_layer_clock.c``).
+    ``model`` is the kind's designed model (its interface's description and its DefaultExperiment);
+    ``variables`` the numbered variables (``number_by_type``) with their ``values`` (name -> value:
+    start values of the non-outputs, the outputs' values after the design); ``dependencies`` maps each
+    output to the inputs it feeds through from; ``c_sources`` and ``c_headers`` the model part's files
+    of ``fmi/native/c`` (the generic layer is added here); ``model_c(guid)`` the text of the generated
+    model.c; ``about`` the documentation's account of what the FMU does; ``fmi_version`` "2.0" or "3.0"
+    picks the generic layer and the model description writer (FMI 3.0: array parameters); ``clock``
+    (FMI 3.0) declares the periodic input clock of the sample period Ts (``c/fmi3_layer_clock.c``).
     """
     out_path = Path(out_path)
     interval = clock_interval(name, values, fmi_version) if clock else 0.0
@@ -115,20 +128,19 @@ def write_native_fmu(name: str, out_path, slave, variables, values: dict, depend
         note = build_binaries(root, name, c_files, f"native {name}", fmi_version)
         if note:
             print(note, file=sys.stderr)
-        text = f"{slave.description} (native C, designed at build time)"
-        if fmi_version == "2.0":
-            view = SimpleNamespace(model_name=name, variables=variables, values=values, description=text)
-            xml = model_description(view, guid, dependencies, slave.experiment(), "", native_sources=tuple(c_files),
-                                    log_categories=log_categories)
-        else:
-            xml = description3.model_description3(
-                model_name=name, identifier=name, token=guid, description=text,
-                slots=description3.twin_slots(variables, values), dependencies=dependencies,
-                log_categories=log_categories, experiment=slave.experiment(), clock_interval=interval)
+        description = ModelDescription(
+            model_name=name, identifier=name, guid=guid,
+            description=f"{model.interface.description} (native C, designed at build time)",
+            generation_tool=f"shapefmu {__version__} native C generator",
+            variables=tuple(v.with_start(None if v.causality == "output" else values[v.name]) for v in variables),
+            dependencies=dependencies, log_categories=log_categories, generation_date=now(),
+            experiment=model.experiment(), source_files=tuple(c_files) if fmi_version == "2.0" else (),
+            clock_interval=interval)
+        (root / "modelDescription.xml").write_text(write(description, fmi_version), encoding="utf-8")
+        if fmi_version == "3.0":
             (root / "terminalsAndIcons").mkdir()
             (root / "terminalsAndIcons" / "terminalsAndIcons.xml").write_text(
-                description3.terminals_and_icons(*description3.TWIN_TERMINALS[name]), encoding="utf-8")
-        (root / "modelDescription.xml").write_text(xml, encoding="utf-8")
-        add_documentation(root, about)
+                fmi3.terminals_and_icons(model.interface.command_in, model.interface.command_out), encoding="utf-8")
+        add_documentation(root, about, model.picture())
         zip_fmu(root, out_path)
     return out_path

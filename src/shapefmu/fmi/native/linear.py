@@ -14,14 +14,15 @@ naming); matrix entries ``A[i,j]`` (1-based).
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import casadi as ca
 import numpy as np
 import scipy.linalg
 
-from shapefmu.fmi.native.model_part import ModelPart, ScalarParameter, Signal
+from shapefmu.fmi.native.model_part import ModelPart, ScalarParameter, Signal, per_second
 from shapefmu.plants import Plant
-from shapefmu.plants.library import STANDARD_GRAVITY
+from shapefmu.plants.library import STANDARD_GRAVITY, sprung_masses_matrices
 from shapefmu.plants.loader import PARAMETER_SPECS
 
 # Library plants name the mode frequencies omega (rad/s) where model files write f (Hz or rad/s).
@@ -52,8 +53,8 @@ class _Parameters:
 
     def _make(self, name: str, value: float, unit: str, constraint: str, factor: float) -> ca.SX:
         symbol = ca.SX.sym(name)
-        self.scalars.append(ScalarParameter(name, symbol, float(value), unit, self.tunable, constraint,
-                                            self.descriptions.get(name.split("[")[0], "")))
+        description = self.descriptions.get(name.split("[")[0]) or f"parameter {name} of the {self.plant.kind} model"
+        self.scalars.append(ScalarParameter(name, symbol, float(value), unit, self.tunable, constraint, description))
         return factor * symbol
 
     def scalar(self, name: str, constraint: str = "any", default: float | None = None) -> ca.SX:
@@ -158,6 +159,18 @@ def _kind_mass_spring_chain(p: _Parameters):
     return A, B, C, ca.SX.zeros(n, 1)
 
 
+def _kind_sprung_masses(p: _Parameters):
+    """Masses sprung from a driven carriage: the library's own matrices (plants.library.sprung_masses)
+    of the symbols."""
+    masses = p.vector("masses", "positive")
+    n = len(masses)
+    stiffnesses = p.vector("stiffnesses", "positive")
+    dampers = p.vector("dampers", "nonnegative", default=0.0, size=n)
+    if len(stiffnesses) != n or len(dampers) != n:
+        raise _Mismatch("N sprung masses need N stiffnesses and dampers")
+    return sprung_masses_matrices(masses, stiffnesses, dampers, ca.SX.zeros)
+
+
 def _kind_transfer_function(p: _Parameters):
     """num(s)/den(s) in controllable canonical form, scaled by the frequency sigma = max_k |a_k|^(1/k).
 
@@ -198,6 +211,7 @@ _MAPPINGS = {
     "voice_coil_flexible": (_kind_voice_coil_flexible, True, True),
     "pendula": (_kind_pendula, True, True),
     "mass_spring_chain": (_kind_mass_spring_chain, True, True),
+    "sprung_masses": (_kind_sprung_masses, True, True),
     # The states of a realisation have no physical meaning to carry across a change of
     # coefficients: num and den are fixed.
     "transfer_function": (_kind_transfer_function, False, False),
@@ -215,7 +229,8 @@ def _state_space(plant: Plant):
             for j in range(value.shape[1]):
                 name = f"{key}[{i + 1},{j + 1}]"
                 symbol = ca.SX.sym(name)
-                scalars.append(ScalarParameter(name, symbol, float(value[i, j]), "", True, "any"))
+                scalars.append(ScalarParameter(name, symbol, float(value[i, j]), "", True, "any",
+                                               f"entry ({i + 1}, {j + 1}) of the state-space matrix {key}"))
                 M[i, j] = symbol
         matrices.append(M)
     return scalars, matrices
@@ -269,15 +284,17 @@ def state_nominals(A: np.ndarray, B: np.ndarray) -> np.ndarray:
     return np.array([10.0 ** round(math.log10(v)) if v > 0 and math.isfinite(v) else 1.0 for v in peak])
 
 
-def model_part(plant: Plant, *, name: str | None = None, signal_units: dict | None = None,
+def model_part(plant: Plant, *, name: str | None = None, signals: dict | None = None,
                descriptions: dict | None = None, description: str = "") -> ModelPart:
     """The model part of a linear plant: its kind's parameter mapping (or state_space), checked
     against the plant's own matrices at the plant's parameter values.
 
-    ``signal_units`` maps input and output names to units, ``descriptions`` parameter names to
-    descriptions (both as read from a model file).
+    ``signals`` maps input and output names to their model-file fields (``unit``, ``description``),
+    ``descriptions`` parameter names to descriptions (both as read from a model file). An input
+    with a limit |u| <= U gets min -U and max U; the states are described by what they are in the
+    plant's kind (``_state_signals``).
     """
-    signal_units = signal_units or {}
+    signals = signals or {}
     matrices = None
     keep_states = True
     mapping = _MAPPINGS.get(plant.kind)
@@ -300,16 +317,57 @@ def model_part(plant: Plant, *, name: str | None = None, signal_units: dict | No
     A, B, C, D = matrices
     numeric_A, numeric_B = _numeric(scalars, [A, B])
     nominals = state_nominals(numeric_A, numeric_B)
-    state_names = plant.states if keep_states else tuple(f"x_{i}" for i in range(1, A.shape[0] + 1))
     x = ca.SX.sym("x", A.shape[0])
     u = ca.SX.sym("u", B.shape[1])
+    outputs = tuple(_signal(s, signals, f"output {s} of the plant") for s in plant.outputs)
+    limits = {s: plant.limits.get(s) for s in plant.inputs}
     return ModelPart(
         name=name or plant.name,
         description=description,
-        states=tuple(Signal(s, nominal=float(v)) for s, v in zip(state_names, nominals)),
-        inputs=tuple(Signal(s, signal_units.get(s, "")) for s in plant.inputs),
-        outputs=tuple(Signal(s, signal_units.get(s, "")) for s in plant.outputs),
+        states=_state_signals(plant.kind if keep_states else "realisation", plant.states, nominals, outputs),
+        inputs=tuple(replace(_signal(s, signals, f"input {s} of the plant"), minimum=-limits[s], maximum=limits[s])
+                     if limits[s] is not None else _signal(s, signals, f"input {s} of the plant") for s in plant.inputs),
+        outputs=outputs,
         parameters=tuple(scalars),
         x=x, u=u, f=A @ x + B @ u, g=C @ x + D @ u,
         linear=True,
     )
+
+
+def _signal(name: str, signals: dict, fallback: str) -> Signal:
+    """An input or output with its model-file unit and description (``fallback`` where it has none)."""
+    fields = signals.get(name, {})
+    return Signal(name, fields.get("unit", ""), description=fields.get("description") or fallback)
+
+
+# What the states of a kind are, in pairs (a position, its rate), the k-th position being the k-th
+# output's quantity: the names of each pair, by index k (0-based), in the order library.py builds them.
+_PAIRS = {
+    "rigid_flexible": lambda k: ("rigid-body position", "rigid-body velocity") if k == 0 else
+    (f"deflection of flexible mode {k}", f"deflection rate of flexible mode {k}"),
+    "pendula": lambda k: ("cart position", "cart velocity") if k == 0 else
+    (f"swing angle of pendulum {k}", f"swing rate of pendulum {k}"),
+    "mass_spring_chain": lambda k: (f"position of mass {k + 1}", f"velocity of mass {k + 1}"),
+    "sprung_masses": lambda k: ("carriage position", "carriage velocity") if k == 0 else
+    (f"deflection of sprung mass {k} from the carriage", f"deflection rate of sprung mass {k}"),
+}
+_PAIRS["voice_coil_flexible"] = _PAIRS["rigid_flexible"]
+
+
+def _state_signals(kind: str, names, nominals, outputs) -> tuple[Signal, ...]:
+    """The states with what they are: a kind's positions and rates (their units those of its outputs
+    and per second), a transfer function's realisation or a state-space model's states (no unit)."""
+    if kind in _PAIRS:
+        signals = []
+        for i, (name, nominal) in enumerate(zip(names, nominals)):
+            unit = outputs[i // 2].unit
+            text = _PAIRS[kind](i // 2)[i % 2]
+            signals.append(Signal(name, unit if i % 2 == 0 else per_second(unit), nominal=float(nominal),
+                                  description=text))
+        return tuple(signals)
+    if kind == "realisation":
+        return tuple(Signal(f"x_{i}", nominal=float(v), description=f"state {i} of the transfer function's "
+                            "controllable canonical realisation, scaled (no physical unit)")
+                     for i, v in enumerate(nominals, 1))
+    return tuple(Signal(s, nominal=float(v), description=f"state {s} of the plant's state-space model")
+                 for s, v in zip(names, nominals))

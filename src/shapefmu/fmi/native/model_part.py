@@ -9,15 +9,22 @@ serve both.
 
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import dataclass
 
 import casadi as ca
+import numpy as np
 
+from shapefmu.fmi.kinds.interface import Interface, Variable
 from shapefmu.runtime.checks import check_text
 
 # What the C wrapper checks when a parameter is set (plant_model.h, PlantConstraint).
 CONSTRAINTS = ("any", "positive", "nonnegative", "nonzero", "damping_ratio")
+# The inclusive lower bound (FMI min) a constraint gives; a strict one (> 0) has none.
+_LOWER_BOUNDS = {"nonnegative": 0.0, "damping_ratio": 0.0}
+# The damping ratio the icon's magnitude responses are drawn with at least (ModelPart.picture).
+PICTURE_DAMPING = 1e-3
 
 # A structured FMI 2.0 name without quoted parts (fmi2 standard, section 2.2.9): identifiers
 # separated by dots, each with optional array indices.
@@ -53,13 +60,16 @@ class ScalarParameter:
 
 @dataclass(frozen=True)
 class Signal:
-    """A state, input or output: its name, unit, start value (states, inputs) and nominal (states)."""
+    """A state, input or output: its name, unit, start value (states, inputs), nominal (states),
+    description and limits (inputs)."""
 
     name: str
     unit: str = ""
     start: float = 0.0
     nominal: float = 1.0
     description: str = ""
+    minimum: float | None = None   # an input's limits
+    maximum: float | None = None
 
 
 @dataclass(frozen=True)
@@ -84,13 +94,15 @@ class ModelPart:
     g: ca.SX
     linear: bool
     substep_parameter: str | None = None
+    source: str = ""   # where the model comes from (a model file's ``source``: "paper 002, eq. (1), Table I")
 
     def __post_init__(self):
         # The name and every description and unit reach modelDescription.xml (escaped there, but
         # XML cannot carry control characters at all); the C sees only check_name'd names and the
-        # model identifier made of the name (description.model_identifier), never these strings.
+        # model identifier made of the name (``identifier``), never these strings.
         check_text(self.name, "plant name")
         check_text(self.description, f"description of plant {self.name!r}")
+        check_text(self.source, f"source of plant {self.name!r}")
         for what, signals in (("state", self.states), ("input", self.inputs), ("output", self.outputs)):
             for signal in signals:
                 check_name(signal.name, f"{what} name")
@@ -111,6 +123,77 @@ class ModelPart:
         if not self.linear and self.substep_parameter not in [p.name for p in self.parameters]:
             raise ValueError(f"plant {self.name!r}: a nonlinear plant needs its RK4 substep among the parameters, "
                              f"got substep_parameter={self.substep_parameter!r}")
+
+    @property
+    def identifier(self) -> str:
+        """The C identifier the shared library is named by: the name with non-word characters replaced."""
+        identifier = "".join(c if c.isalnum() or c == "_" else "_" for c in self.name)
+        return identifier if identifier[:1].isalpha() else f"plant_{identifier}"
+
+    def interface(self) -> Interface:
+        """The plant FMU's interface, its variables in the order of the values of ``c/plant_model.h``:
+        time, the states ``state.<name>``, their derivatives, the inputs, the outputs, the parameters.
+        One input is the command the plant takes (FMI 3.0 terminals); several are no one command."""
+        variables = [Variable("time", "Real", "independent", "continuous")]
+        variables += [Variable(f"state.{s.name}", "Real", "local", "continuous", s.start, s.unit, s.description,
+                               initial="exact", nominal=s.nominal) for s in self.states]
+        variables += [Variable(f"der(state.{s.name})", "Real", "local", "continuous", None, per_second(s.unit),
+                               f"time derivative of state.{s.name}", initial="calculated",
+                               derivative_of=f"state.{s.name}") for s in self.states]
+        variables += [Variable(s.name, "Real", "input", "continuous", s.start, s.unit, s.description, s.minimum,
+                               s.maximum) for s in self.inputs]
+        variables += [Variable(s.name, "Real", "output", "continuous", None, s.unit, s.description, initial="calculated")
+                      for s in self.outputs]
+        variables += [Variable(q.name, "Real", "parameter", "tunable" if q.tunable else "fixed", q.value, q.unit,
+                               q.description, _LOWER_BOUNDS.get(q.constraint), initial="exact") for q in self.parameters]
+        command = self.inputs[0].name if len(self.inputs) == 1 else None
+        return Interface(self.name, self.description, tuple(variables), command_in=command)
+
+    def linearisation(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(A, B, C, D) of the plant at rest (x = 0, u = 0, the parameters' values)."""
+        point = (np.zeros(self.x.shape[0]), np.zeros(self.u.shape[0]), [q.value for q in self.parameters])
+        _, jacobians = self.functions()
+        return tuple(np.array(M, dtype=float) for M in jacobians(*point))
+
+    def _frequencies(self) -> list[float]:
+        """The natural frequencies (rad/s) of the oscillatory modes of the linearisation, ascending."""
+        A = self.linearisation()[0]
+        eigenvalues = np.linalg.eigvals(A) if A.size else np.zeros(0)
+        scale = max(np.abs(eigenvalues).max(initial=0.0), 1.0)
+        return sorted(abs(v) for v in eigenvalues if v.imag > 1e-9 * scale)
+
+    def experiment(self) -> tuple[float, float, float]:
+        """The DefaultExperiment (start, stop, step), s: ten periods of the slowest oscillatory mode of
+        the linearisation at rest, in steps of a twentieth of the fastest one's period rounded down to
+        a power of ten; (0, 1, 1e-3) without one."""
+        omegas = self._frequencies()
+        if not omegas:
+            return 0.0, 1.0, 1e-3
+        step = 10.0 ** math.floor(math.log10(2.0 * math.pi / omegas[-1] / 20.0))
+        stop = float(f"{step * math.ceil(10.0 * 2.0 * math.pi / omegas[0] / step):.12g}")
+        return 0.0, stop, step
+
+    def picture(self):
+        """The icon's picture (``shapefmu.fmi.icon``): the plant's modes, as the resonance peaks of the
+        sum of its outputs' magnitude responses (each scaled to its peak), log-log, around the modes.
+        The responses are taken at s = (PICTURE_DAMPING + j) w, just right of the imaginary axis, so an
+        undamped mode's pole on the grid draws a tall peak instead of a singular matrix."""
+        A, B, C, D = self.linearisation()
+        omegas = self._frequencies() or [1.0]
+        grid = np.logspace(math.log10(omegas[0] / 4.0), math.log10(omegas[-1] * 4.0), 97)
+        n = A.shape[0]
+        G = np.array([np.abs(C @ np.linalg.solve((PICTURE_DAMPING + 1j) * w * np.eye(n) - A, B[:, :1]) + D[:, :1])[:, 0]
+                      for w in grid])
+        logs = np.log10(np.maximum((G / np.maximum(G.max(axis=0), 1e-300)).sum(axis=1), 1e-12))
+        return [("line", [(math.log10(w), g - logs.min()) for w, g in zip(grid, logs)])]
+
+    def dependencies_by_name(self) -> dict[str, list[str]]:
+        """Each output's and derivative's dependencies on the states and inputs, by variable name."""
+        known = [f"state.{s.name}" for s in self.states] + [s.name for s in self.inputs]
+        derivative_dependencies, output_dependencies = self.dependencies()
+        result = {f"der(state.{s.name})": [known[d] for d in deps] for s, deps in zip(self.states, derivative_dependencies)}
+        result.update({s.name: [known[d] for d in deps] for s, deps in zip(self.outputs, output_dependencies)})
+        return result
 
     @property
     def p(self) -> ca.SX:
@@ -140,3 +223,14 @@ class ModelPart:
                 rows[row].append(column)
             result.append([sorted(r) for r in rows])
         return result[0], result[1]
+
+
+def per_second(unit: str) -> str:
+    """The unit of a quantity's time derivative ("" for a quantity without a unit): rad -> rad/s,
+    rad/s -> rad/s2 (FMI's own way of writing a power)."""
+    if not unit:
+        return ""
+    if unit == "1":
+        return "1/s"
+    power = re.fullmatch(r"(.*)/s(\d*)", unit)
+    return f"{power.group(1)}/s{int(power.group(2) or 1) + 1}" if power else f"{unit}/s"

@@ -83,16 +83,18 @@ class NonlinearPlant:
                              f"parameters: {free}")
 
     def model_part(self) -> ModelPart:
-        parameters = [ScalarParameter(p.name, p.symbol, float(p.value), p.unit, True, p.constraint, p.description)
-                      for p in self.parameters]
+        parameters = [ScalarParameter(p.name, p.symbol, float(p.value), p.unit, True, p.constraint,
+                                      p.description or f"parameter {p.name}") for p in self.parameters]
         parameters.append(ScalarParameter("substep", ca.SX.sym("substep"), float(self.substep), "s", True, "positive",
                                           "longest RK4 substep of a Co-Simulation step"))
         return ModelPart(
             name=self.name,
             description=self.description,
-            states=tuple(Signal(v.name, v.unit, float(v.value), description=v.description) for v in self.states),
-            inputs=tuple(Signal(v.name, v.unit, float(v.value), description=v.description) for v in self.inputs),
-            outputs=tuple(Signal(o.name, o.unit, description=o.description) for o in self.outputs),
+            states=tuple(Signal(v.name, v.unit, float(v.value), description=v.description or f"state {v.name}")
+                         for v in self.states),
+            inputs=tuple(Signal(v.name, v.unit, float(v.value), description=v.description or f"input {v.name}")
+                         for v in self.inputs),
+            outputs=tuple(Signal(o.name, o.unit, description=o.description or f"output {o.name}") for o in self.outputs),
             parameters=tuple(parameters),
             x=ca.vertcat(*[v.symbol for v in self.states]),
             u=ca.vertcat(*[v.symbol for v in self.inputs]),

@@ -1,10 +1,10 @@
 """The native C ProfileGenerator FMU: the pythonfmu ProfileGenerator's variables and numbers in C.
 
 ``build_native_profile(out_path, **start_values) -> Path`` writes an FMI 2.0 Co-Simulation FMU: the
-generic FMI 2.0 layer, the generator (``c/motion_fmi2.c``: runtime/motion.py's
+generic FMI 2.0 layer, the generator (``c/motion_part.c``: runtime/motion.py's
 PiecewiseAcceleration.state, the start latch and t_start, operation for operation) and a generated
-``model.c``: the variables with their start values and the move, designed here by the pythonfmu
-slave's own initialisation (a twin-pulse kind of paper 003, time-frequency of paper 004, or a
+``model.c``: the variables with their start values and the move, designed here by the kind's own
+initialisation (``shapefmu.fmi.kinds``) (a twin-pulse kind of paper 003, time-frequency of paper 004, or a
 shaped bang-bang of paper 002) and stored as its breaks, levels and the velocity and position at
 every break. A twin-pulse or time-frequency design keeps its parameters at their build values in
 the FMU; a shaped bang-bang is closed-form and re-designed in C at the exit of initialisation
@@ -17,14 +17,13 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from shapefmu.fmi.native.kernel_fmu import c_doubles, number_by_type, twin_variables_c, write_native_fmu
-from shapefmu.fmi.native.sampled import CLOSED_FORM
-from shapefmu.fmi.python.builder import designed_slave
-from shapefmu.fmi.python.slaves.profile_generator import MAX_MODES
+from shapefmu.fmi.native.kernel_fmu import c_doubles, designed_twin, twin_variables_c, write_native_fmu
+from shapefmu.fmi.kinds.profile_generator import MAX_MODES
 from shapefmu.runtime import shaper_designs
+from shapefmu.runtime.shaper_designs import CLOSED_FORM
 
 NAME = "ProfileGenerator"
-SOURCES = ("motion_fmi2.c", "motion_design.c", "exact_sum.c", "sample_clock.c", "shaper_designs.c", "twin_variables.c")
+SOURCES = ("motion_part.c", "motion_design.c", "exact_sum.c", "sample_clock.c", "shaper_designs.c", "twin_variables.c")
 HEADERS = ("motion_model.h", "motion_design.h", "exact_sum.h", "sample_clock.h", "shaper_designs.h", "twin_variables.h")
 MAX_LEVELS = 1_000_000
 _MEANINGS = {"profile": "MOTION_PROFILE", "distance": "MOTION_DISTANCE", "speed": "MOTION_SPEED",
@@ -74,14 +73,12 @@ const MotionShaper motion_shaper = {{{int(bang_bang)}, {int(closed)}, {len(times
 
 def build_native_profile(out_path, *, fmi_version: str = "2.0", clock: bool = False, **start_values) -> Path:
     """Build the native ProfileGenerator FMU with ``start_values`` (parameters of the pythonfmu one)."""
-    slave = designed_slave(NAME, start_values)
-    motion = slave.motion
+    model, variables, values = designed_twin(NAME, start_values)
+    motion = model.motion
     if len(motion.levels) > MAX_LEVELS:
         raise ValueError(f"the move has {len(motion.levels):,} pieces, more than the {MAX_LEVELS:,} a native "
                          f"ProfileGenerator holds (shapefmu.fmi.native.profiles.MAX_LEVELS)")
-    variables = number_by_type(slave.variables)
-    values = dict(slave.values)
-    about = f"{sys.modules[type(slave).__module__].__doc__}\n\n{NATIVE_NOTE}"
-    return write_native_fmu(NAME, out_path, slave, variables, values, slave.output_dependencies(), SOURCES, HEADERS,
+    about = f"{sys.modules[type(model).__module__].__doc__}\n\n{NATIVE_NOTE}"
+    return write_native_fmu(NAME, out_path, model, variables, values, model.output_dependencies(), SOURCES, HEADERS,
                             lambda guid: _model_c(variables, values, motion, guid), about, fmi_version=fmi_version,
                             clock=clock)

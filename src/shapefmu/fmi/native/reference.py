@@ -1,9 +1,9 @@
 """The native C ReferencePlayer FMU: the pythonfmu ReferencePlayer's variables and numbers in C.
 
 ``build_native_reference(out_path, **start_values) -> Path`` writes an FMI 2.0 Co-Simulation FMU:
-the generic FMI 2.0 layer, the player (``c/table_fmi2.c``: runtime/reference_player.py's
+the generic FMI 2.0 layer, the player (``c/table_part.c``: runtime/reference_player.py's
 SignalTable value, integral and step average, operation for operation) and a generated
-``model.c`` holding the table as the pythonfmu slave parsed it here (its distinct times, the values
+``model.c`` holding the table as the kind's model parsed it here (its distinct times, the values
 arriving at and leaving each, the running integral, the snap tolerance) and the table's JSON text,
 the ``table`` parameter's start value, which keeps its build value in the FMU. The table's size is
 bounded before any C is written, by what gcc compiles in seconds for each of the three platforms:
@@ -18,12 +18,11 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from shapefmu.fmi.native.kernel_fmu import c_doubles, number_by_type, write_native_fmu
-from shapefmu.fmi.python.builder import designed_slave
-from shapefmu.fmi.python.model_description import XML_MAX_TEXT_LENGTH, check_xml_string
+from shapefmu.fmi.native.kernel_fmu import c_doubles, designed_twin, write_native_fmu
+from shapefmu.fmi.description import XML_MAX_TEXT_LENGTH, check_xml_string
 
 NAME = "ReferencePlayer"
-SOURCES = ("table_fmi2.c",)
+SOURCES = ("table_part.c",)
 HEADERS = ("table_model.h",)
 MAX_TABLE_TIMES = 100_000
 MAX_TABLE_TEXT = XML_MAX_TEXT_LENGTH  # bytes
@@ -71,18 +70,16 @@ def build_native_reference(out_path, *, fmi_version: str = "2.0", clock: bool = 
     if size > MAX_TABLE_TEXT:
         raise ValueError(f"table is {size:,} bytes of JSON, more than the {MAX_TABLE_TEXT:,} a native "
                          f"ReferencePlayer holds (shapefmu.fmi.native.reference.MAX_TABLE_TEXT)")
-    slave = designed_slave(NAME, start_values)
-    table = slave.table
+    model, variables, values = designed_twin(NAME, start_values)
+    table = model.table
     if len(table.times) > MAX_TABLE_TIMES:
         raise ValueError(f"the table has {len(table.times):,} distinct times, more than the {MAX_TABLE_TIMES:,} a native "
                          f"ReferencePlayer holds (shapefmu.fmi.native.reference.MAX_TABLE_TIMES)")
-    check_xml_string(slave.values["table"], "table")  # NUL, other control characters, surrogates: before any C
-    variables = number_by_type(slave.variables)
+    check_xml_string(values["table"], "table")  # NUL, other control characters, surrogates: before any C
     if [v.name for v in variables] != ["y", "y_mean", "table"]:
-        raise RuntimeError(f"the ReferencePlayer slave's variables {[v.name for v in variables]} are not those "
-                           f"c/table_fmi2.c knows: y, y_mean, table")
-    values = dict(slave.values)
-    about = f"{sys.modules[type(slave).__module__].__doc__}\n\n{NATIVE_NOTE}"
-    return write_native_fmu(NAME, out_path, slave, variables, values, slave.output_dependencies(), SOURCES, HEADERS,
+        raise RuntimeError(f"the ReferencePlayer's variables {[v.name for v in variables]} are not those "
+                           f"c/table_part.c knows: y, y_mean, table")
+    about = f"{sys.modules[type(model).__module__].__doc__}\n\n{NATIVE_NOTE}"
+    return write_native_fmu(NAME, out_path, model, variables, values, model.output_dependencies(), SOURCES, HEADERS,
                             lambda guid: _model_c(table, values["table"], guid), about, fmi_version=fmi_version,
                             clock=clock)

@@ -1,11 +1,11 @@
 """The native C STOSController FMU: the pythonfmu STOSController's variables and numbers in C.
 
 ``build_native_stos(out_path, **start_values) -> Path`` writes an FMI 2.0 Co-Simulation FMU: the
-generic FMI 2.0 layer, the STOS model part (``c/stos_fmi2.c``: sampled semantics, feed-through,
+generic FMI 2.0 layer, the STOS model part (``c/stos_part.c``: sampled semantics, feed-through,
 FMU state), the law (``c/stos_law.c``: runtime/stos.py's locate, sub-sample switching and settle
 hand-over, operation for operation), the absolute sample grid (``c/sample_clock.c``) and a
 generated ``model.c``: the variables with their start values and the build's shaper, designed here
-by the pythonfmu slave's own initialisation (``runtime.shaper_designs``). The switching curves are
+by the kind's own initialisation (``shapefmu.fmi.kinds``, ``runtime.shaper_designs``). The switching curves are
 designed in C at the exit of initialisation (``c/stos_law.c``: runtime/stos.py ``stos_curves``,
 closed-form), so b, U, damping, Ts and the settle law may change before it, as in the pythonfmu
 FMU; a shaper of a closed-form kind (zv, zvd, zvdd, zv_dn, mzv) is re-designed in C from kind, n,
@@ -18,12 +18,11 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from shapefmu.fmi.native.kernel_fmu import c_doubles, number_by_type, twin_variables_c, write_native_fmu
-from shapefmu.fmi.native.sampled import CLOSED_FORM
-from shapefmu.fmi.python.builder import designed_slave
+from shapefmu.fmi.native.kernel_fmu import c_doubles, designed_twin, twin_variables_c, write_native_fmu
+from shapefmu.runtime.shaper_designs import CLOSED_FORM
 
 NAME = "STOSController"
-SOURCES = ("stos_fmi2.c", "stos_law.c", "exact_sum.c", "sample_clock.c", "shaper_designs.c", "twin_variables.c")
+SOURCES = ("stos_part.c", "stos_law.c", "exact_sum.c", "sample_clock.c", "shaper_designs.c", "twin_variables.c")
 HEADERS = ("stos_model.h", "stos_law.h", "exact_sum.h", "sample_clock.h", "shaper_designs.h", "twin_variables.h")
 _MEANINGS = {"b": "STOS_B", "U": "STOS_U", "damping": "STOS_DAMPING", "kind": "STOS_KIND", "n": "STOS_ORDER",
              "n_modes": "STOS_MODES", **{f"f[{i}]": f"STOS_F{i}" for i in range(1, 5)},
@@ -53,11 +52,9 @@ const StosShaper stos_shaper = {{{len(times)}, {int(values["kind"] in CLOSED_FOR
 
 def build_native_stos(out_path, *, fmi_version: str = "2.0", clock: bool = False, **start_values) -> Path:
     """Build the native STOSController FMU with ``start_values`` (parameters of the pythonfmu one)."""
-    slave = designed_slave(NAME, start_values)
-    times, amplitudes = slave.kernel.curves["times"], slave.kernel.curves["amplitudes"]
-    variables = number_by_type(slave.variables)
-    values = dict(slave.values)
-    about = f"{sys.modules[type(slave).__module__].__doc__}\n\n{NATIVE_NOTE}"
-    return write_native_fmu(NAME, out_path, slave, variables, values, slave.output_dependencies(), SOURCES, HEADERS,
+    model, variables, values = designed_twin(NAME, start_values)
+    times, amplitudes = model.kernel.curves["times"], model.kernel.curves["amplitudes"]
+    about = f"{sys.modules[type(model).__module__].__doc__}\n\n{NATIVE_NOTE}"
+    return write_native_fmu(NAME, out_path, model, variables, values, model.output_dependencies(), SOURCES, HEADERS,
                             lambda guid: _model_c(variables, values, times, amplitudes, guid), about, fmi_version=fmi_version,
                             clock=clock)

@@ -1,6 +1,6 @@
-"""pythonfmu FMUs: slave classes that run ``runtime/`` code, the builder that bundles them, the C shim.
+"""pythonfmu FMUs: the slave that runs a kind's model (``shapefmu.fmi.kinds``) inside the FMU, the
+builder that bundles them, the C shim.
 
-Modules here import the standard library, ``runtime/`` and each other (``slaves/`` and
-``slave_base``/``state_codec`` are copied into every FMU, so they import nothing else); the
-builder may also import the design layer.
+``slave_base`` and ``state_codec`` are copied into every FMU with the kind's module and ``runtime/``,
+so they import the standard library and each other only; the builder may also import the design layer.
 """

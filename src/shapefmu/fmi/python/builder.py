@@ -6,17 +6,18 @@ An FMU holds
   and ``shim/python_runtime.c``, compiled here with the system C compiler), which makes libpython
   global, starts the interpreter, keeps the FMI 2.0 state machine and forwards to
 - ``binaries/linux64/<Model>_pythonfmu.so``: pythonfmu's export library, which embeds Python;
-- ``resources/<package>/``: the slave, its base and ``runtime/``, under a package name made of the
-  shapefmu version and a hash of exactly these sources, so FMUs built from different code never
-  share a module in one interpreter, and FMUs built from the same code share it harmlessly;
+- ``resources/<package>/``: the kind (its interface and model, ``fmi/kinds``), the slave and
+  ``runtime/``, under a package name made of the shapefmu version and a hash of exactly these
+  sources, so FMUs built from different code never share a module in one interpreter, and FMUs
+  built from the same code share it harmlessly;
 - ``resources/<package>_<Model>.py`` and ``resources/slavemodule.txt``: the entry module the export
   library imports;
 - ``resources/shapefmu_build.json``: the start values baked in, the GUID and the declared
   dependencies, read by every instance (so two builds of one slave differ only here);
 - ``resources/shim/`` (the front end's sources, for the record) and ``modelDescription.xml``.
 
-Start values are checked at build time by running the slave's own design (``initialize``), so a
-bad parameter fails the build with the slave's ValueError.
+Start values are checked at build time by running the kind's own design (``Model.initialize``), so
+a bad parameter fails the build with its ValueError.
 """
 
 from __future__ import annotations
@@ -37,11 +38,12 @@ from pathlib import Path
 from shapefmu import __version__
 from shapefmu.files import check_output, write_file
 from shapefmu.fmi.compiler import run_compiler
-from shapefmu.fmi.python.model_description import model_description
-from shapefmu.fmi.python.slaves import SLAVES
+from shapefmu.fmi.description import ModelDescription, fmi2, now
+from shapefmu.fmi.kinds import KINDS, designed, kind
 
 PYTHON_FMI_DIR = Path(__file__).parent
 PACKAGE_DIR = PYTHON_FMI_DIR.parent.parent
+KINDS_DIR = PYTHON_FMI_DIR.parent / "kinds"
 SHIM_DIR = PYTHON_FMI_DIR / "shim"
 SHIM_SOURCES = (SHIM_DIR / "fmi2_shim.c", SHIM_DIR / "fmu_states.c", SHIM_DIR / "python_runtime.c")
 # The FMI 2.0 standard headers, shared with the native FMUs.
@@ -50,8 +52,13 @@ SHIM_FILES = (*SHIM_SOURCES, SHIM_DIR / "fmi2_shim.h")  # the standard's headers
 BUILD_FILE = "shapefmu_build.json"
 ENTRY_MODULE = '''"""Entry module of the {name} FMU, imported by pythonfmu's export library."""
 
+from {package}.fmi.kinds.{module} import Model as _Model
 from {package}.fmi.python import slave_base as _slave_base
-from {package}.fmi.python.slaves.{module} import {name}  # noqa: F401
+
+
+class {name}(_slave_base.Fmi2Slave):
+    model_class = _Model
+
 
 # Balances the export library's extra release of this module's globals (slave_base.ENTRY_MODULE_REFERENCES).
 _slave_base.ENTRY_MODULE_REFERENCES.append(globals())
@@ -60,27 +67,20 @@ _slave_base.ENTRY_MODULE_REFERENCES.append(globals())
 FALLBACK_MINORS = (13, 12, 11, 10, 9, 8)
 
 
-def slave_class(name: str):
-    """The slave class registered as ``name`` in ``shapefmu.fmi.python.slaves.SLAVES``."""
-    if name not in SLAVES:
-        raise ValueError(f"name must be one of {', '.join(SLAVES)}, got {name!r}")
-    module = importlib.import_module(f"shapefmu.fmi.python.slaves.{SLAVES[name]}")
-    return getattr(module, name)
-
-
 def bundled_sources(name: str) -> dict[str, bytes]:
-    """Files of the bundled package, relative to it: runtime/, the slave base and the slave."""
+    """Files of the bundled package, relative to it: runtime/, the kind and the slave."""
+    kind(name)  # a known kind, or ValueError
     files = {
         "__init__.py": b'"""shapefmu code bundled into one FMU."""\n',
         "fmi/__init__.py": b"",
         "fmi/python/__init__.py": b"",
-        "fmi/python/slaves/__init__.py": b"",
     }
     for path in sorted((PACKAGE_DIR / "runtime").glob("*.py")):
         files[f"runtime/{path.name}"] = path.read_bytes()
     for module in ("slave_base.py", "state_codec.py"):
         files[f"fmi/python/{module}"] = (PYTHON_FMI_DIR / module).read_bytes()
-    files[f"fmi/python/slaves/{SLAVES[name]}.py"] = (PYTHON_FMI_DIR / "slaves" / f"{SLAVES[name]}.py").read_bytes()
+    for module in ("__init__.py", "interface.py", "model.py", f"{KINDS[name]}.py"):
+        files[f"fmi/kinds/{module}"] = (KINDS_DIR / module).read_bytes()
     return files
 
 
@@ -90,39 +90,6 @@ def package_name(files: dict[str, bytes]) -> str:
     for relative in sorted(files):
         digest.update(relative.encode() + b"\0" + files[relative] + b"\0")
     return f"shapefmu_{__version__.replace('.', '_')}_{digest.hexdigest()[:16]}"
-
-
-def _coerce(var, value):
-    """A start value converted to the variable's type, or ValueError naming it."""
-    if var.type == "Real":
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise ValueError(f"{var.name} must be a real number, got {value!r}")
-        return float(value)
-    if var.type == "Integer":
-        if isinstance(value, bool) or not (isinstance(value, int) or (isinstance(value, float) and value.is_integer())):
-            raise ValueError(f"{var.name} must be an integer, got {value!r}")
-        return int(value)
-    if var.type == "Boolean":
-        if not isinstance(value, bool):
-            raise ValueError(f"{var.name} must be true or false, got {value!r}")
-        return value
-    if not isinstance(value, str):
-        raise ValueError(f"{var.name} must be a string, got {value!r}")
-    return value
-
-
-def designed_slave(name: str, start_values: dict):
-    """An instance of slave ``name`` with ``start_values`` applied and its design run."""
-    slave = slave_class(name)(instance_name="build")
-    for key, value in start_values.items():
-        var = slave.by_name.get(key)
-        if var is None or var.causality not in ("parameter", "input"):
-            settable = ", ".join(v.name for v in slave.variables if v.causality in ("parameter", "input"))
-            raise ValueError(f"{name} has no parameter or input {key!r}; settable: {settable}")
-        slave.values[key] = _coerce(var, value)
-    slave.phase = "initialization"
-    slave.initialize()
-    return slave
 
 
 def _libpython() -> str:
@@ -174,7 +141,7 @@ def _export_library() -> tuple[Path, str]:
 
 
 def build_fmu(name: str, out_path, **start_values) -> Path:
-    """Build FMU ``name`` (a key of ``SLAVES``) to ``out_path`` with ``start_values`` baked in.
+    """Build FMU ``name`` (a key of ``shapefmu.fmi.kinds.KINDS``) to ``out_path`` with ``start_values`` baked in.
 
     Structured variable names are passed as a mapping: ``build_fmu("Shaper", p, **{"f[1]": 2000.0})``.
     Returns the path of the written .fmu.
@@ -182,15 +149,16 @@ def build_fmu(name: str, out_path, **start_values) -> Path:
     if not sys.platform.startswith("linux"):
         raise RuntimeError(f"FMUs are built for linux64 only (the front end is ELF), not for {sys.platform}")
     out_path = Path(out_path)
-    slave = designed_slave(name, start_values)
-    dependencies = slave.output_dependencies()
+    model = designed(name, start_values)
+    dependencies = model.output_dependencies()
     files = bundled_sources(name)
     package = package_name(files)
-    baked = {key: slave.values[key] for key in start_values}
+    baked = {key: model.values[key] for key in start_values}
     identity = json.dumps({"package": package, "model": name, "start": baked}, sort_keys=True)
     guid = "{" + str(uuid.uuid5(uuid.NAMESPACE_URL, "shapefmu:" + identity)) + "}"
     export_library, pythonfmu_version = _export_library()
-    xml = model_description(slave, guid, dependencies, slave.experiment(), pythonfmu_version)
+    xml = fmi2.write(_description(model, guid, dependencies, pythonfmu_version))
+    documentation = _documentation(xml, name, model.picture())
     entry = f"{package}_{name}"
     build = {"guid": guid, "package": package, "start_values": baked, "dependencies": dependencies}
     check_output(out_path, "FMU")
@@ -205,21 +173,44 @@ def build_fmu(name: str, out_path, **start_values) -> Path:
                 for source in SHIM_FILES:  # the record; hosts do not build it
                     fmu.write(source, f"resources/shim/{source.name}")
                 fmu.writestr("resources/slavemodule.txt", entry)
-                fmu.writestr(f"resources/{entry}.py", ENTRY_MODULE.format(name=name, package=package, module=SLAVES[name]))
+                fmu.writestr(f"resources/{entry}.py", ENTRY_MODULE.format(name=name, package=package, module=KINDS[name]))
                 fmu.writestr(f"resources/{BUILD_FILE}", json.dumps(build, indent=2))
                 for relative, content in files.items():
                     fmu.writestr(f"resources/{package}/{relative}", content)
-                for relative, content in _documentation(xml, name).items():
+                for relative, content in documentation.items():
                     fmu.writestr(relative, content)
 
         return write_file(out_path, write, "FMU")  # no half-written FMU is ever left under the final name
 
 
-def _documentation(xml: str, name: str) -> dict[str, bytes]:
-    """documentation/index.html, externalDependencies.txt and model.png of the pythonfmu FMU ``name``."""
-    from shapefmu.fmi.documentation import icon_png, index_html
+# The log categories of a pythonfmu FMU: (name, description).
+LOG_CATEGORIES = (
+    ("logStatusWarning", "Warnings"),
+    ("logStatusError", "Errors: bad parameters, non-finite inputs, calls out of order"),
+    ("logStatusFatal", "Failures of the embedded Python runtime"),
+    ("logAll", "Everything else (debug logging)"),
+)
 
-    about = importlib.import_module(f"shapefmu.fmi.python.slaves.{SLAVES[name]}").__doc__
+
+def _description(model, guid: str, dependencies: dict, pythonfmu_version: str) -> ModelDescription:
+    """The model description of the designed ``model``'s FMU: its kind's variables with the build's
+    start values; no external tool, state get/set and serialisation, Python's own memory."""
+    interface = model.interface
+    variables = tuple(v.with_start(None if v.causality == "output" else model.values[v.name])
+                      for v in interface.variables)
+    return ModelDescription(
+        model_name=interface.name, identifier=interface.name, guid=guid, description=interface.description,
+        generation_tool=f"shapefmu {__version__} (pythonfmu {pythonfmu_version} export library)",
+        variables=variables, dependencies=dependencies, log_categories=LOG_CATEGORIES, generation_date=now(),
+        experiment=model.experiment(), host_memory=False)
+
+
+def _documentation(xml: str, name: str, picture) -> dict[str, bytes]:
+    """documentation/index.html, externalDependencies.txt and model.png (``picture``) of the pythonfmu FMU ``name``."""
+    from shapefmu.fmi.documentation import index_html
+    from shapefmu.fmi.icon import icon_png
+
+    about = kind(name).__doc__
     # The library's file name only: the build machine's folders say nothing about the user's machine.
     soname = Path(_libpython()).name or f"libpython3.{sys.version_info.minor}.so.1.0"
     dependencies = (f"The {name} FMU runs its model in CPython, embedded through pythonfmu's export library.\n"
@@ -229,15 +220,15 @@ def _documentation(xml: str, name: str) -> dict[str, bytes]:
                     f"the library path.\nIt needs no Python package: its code is inside, under resources/.\n")
     return {"documentation/index.html": index_html(xml.encode(), about, ["linux64"]).encode(),
             "documentation/externalDependencies.txt": dependencies.encode(),
-            "model.png": icon_png()}
+            "model.png": icon_png(picture)}
 
 
 def build_all(out_dir, progress=None) -> list[Path]:
-    """Build every registered FMU with its default start values into ``out_dir``; ``progress``
+    """Build every kind's FMU with its default start values into ``out_dir``; ``progress``
     (a function of a line of text, or None) is told as each FMU begins."""
     out_dir = Path(out_dir)
     built = []
-    for name in SLAVES:
+    for name in KINDS:
         if progress is not None:
             progress(f"building {name}.fmu")
         built.append(build_fmu(name, out_dir / f"{name}.fmu"))

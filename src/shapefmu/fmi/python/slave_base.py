@@ -1,72 +1,34 @@
-"""The common base of every shapefmu FMU slave: variables, call order, errors, state, logging.
+"""The one pythonfmu slave class: any FMU kind of ``shapefmu.fmi.kinds`` run inside its FMU, with the
+call order, errors, state and logging of FMI 2.0.
 
 Bundled into every FMU (standard library only), where pythonfmu's export library drives it: the
-library finds the slave class by the name ``Fmi2Slave`` in its bases and calls the methods below
-(``set_real``, ``do_step``, ``_get_fmu_state``, ...). pythonfmu's own Python package is not needed
-at run time.
+library finds the slave class by the name ``Fmi2Slave`` in its bases (the FMU's entry module derives
+one per kind, setting ``model_class``) and calls the methods below (``set_real``, ``do_step``,
+``_get_fmu_state``, ...). pythonfmu's own Python package is not needed at run time.
 
-What the base guarantees for every FMU built on it:
+The kind's interface (``model_class.interface``) gives the variables, value reference = position;
+its model (``model_class``) computes. What the slave guarantees for every kind:
 
-- every variable has a unit and a description (``declare`` refuses one without);
 - a bad call never raises into the host: wrong value reference or type, a parameter set after
   initialisation, a NaN input, a step at the wrong time, an invalid design... are logged through the
   FMI logger with status fmi2Error and the call returns normally; the FMU's C front end
   (``shim/fmi2_shim.c``) turns the call into fmi2Error, and the instance stays usable. Every method
-  the export library calls catches what the slave's hooks raise: pythonfmu 0.7.0 answers an
+  the export library calls catches what the model's hooks raise: pythonfmu 0.7.0 answers an
   escaping exception with fmi2Fatal and releases the instance's Python objects twice (the front
   end then stops forwarding to it, at the cost of a small leak);
-- parameters are validated at the exit of initialisation (``initialize``), where the design runs;
+- parameters are validated at the exit of initialisation (``Model.initialize``), where the design runs;
 - NaN / inf inputs make the next ``fmi2DoStep`` fail with fmi2Error, leaving the state untouched;
 - ``fmi2GetFMUstate`` / ``fmi2SetFMUstate`` and serialisation restore exactly: all variables, the
-  time, the phase, and the kernel objects named in ``state_attributes`` (ring buffers, covariances)
-  through ``state_codec``.
+  time, the phase, and the kernel objects named in the model's ``state_attributes`` (ring buffers,
+  covariances) through ``state_codec``.
 
-How to add an FMU (one module and one registry line):
-
-1. Write ``shapefmu/fmi/python/slaves/<module>.py`` with one class deriving from ``Fmi2Slave``. Import only
-   the standard library, ``..slave_base`` and ``....runtime`` (relative imports: the module is
-   bundled under a package name unique to the build). Set the class attributes ``model_name``,
-   ``description``, ``default_experiment`` (start, stop, step), ``kernels`` (the runtime classes
-   that may appear in the state) and ``state_attributes`` (the attribute names holding them).
-2. ``declare(self)``: call ``self.parameter(...)``, ``self.input(...)``, ``self.output(...)`` for every
-   variable, each with a unit (``"1"`` for dimensionless) and a description. Structured names such
-   as ``f[1]`` are fine. Units other than ``1``, ``s``, ``Hz``, ``rad/s``, ``m``, ``m/s``, ``m/s2``
-   need a line in ``UNITS``.
-3. ``initialize(self)``: validate the parameters with ``runtime.checks`` (raise ValueError naming
-   the parameter, value and valid range) and build the kernels. It runs at the exit of
-   initialisation and again after ``fmi2Reset``.
-4. ``step(self, t, h)``: advance the kernels over (t, t + h] and set the outputs. Raise ValueError
-   for a step the FMU cannot honour. Inputs are already checked for NaN. Any h > 0 must be
-   honoured (hosts trim their last step to 1e-16 s): a sampled FMU takes its samples on the
-   grid t0 + k Ts with ``runtime.sample_clock.SampleClock`` (made in ``initialize``, listed in
-   ``kernels`` and ``state_attributes``), which counts them from the steps, never from the host's t.
-5. ``output_dependencies(self)``: after ``initialize``, ``{output: [inputs it feeds through from]}``;
-   the builder writes it into ModelStructure (and InitialUnknowns).
-6. Add ``"<ModelName>": "<module>"`` to ``SLAVES`` in ``shapefmu/fmi/python/slaves/__init__.py``; then
-   ``shapefmu.fmi.build_fmu("<ModelName>", path, **start_values)`` builds it, ``build_all`` and
-   ``shapefmu build`` include it, and ``tests/test_fmi_build.py`` validates it with fmpy.
+Adding an FMU kind is a module of ``shapefmu.fmi.kinds`` (see there); the builder bundles it.
 """
 
 import math
 from pathlib import Path
 
 from . import state_codec
-
-# Unit definitions the builder writes to modelDescription.xml: name -> SI base-unit exponents and
-# factor (FMI 2.0 section 2.2.2).
-UNITS = {
-    "1": {},
-    "s": {"s": 1},
-    "Hz": {"s": -1},
-    "rad/s": {"rad": 1, "s": -1},
-    "m": {"m": 1},
-    "m/s": {"m": 1, "s": -1},
-    "m/s2": {"m": 1, "s": -2},
-    "1/s": {"s": -1},
-    "1/m": {"m": -1},
-    "s/m": {"m": -1, "s": 1},
-    "1/(m.s)": {"m": -1, "s": -1},
-}
 
 OK, WARNING, DISCARD, ERROR, FATAL = range(5)
 
@@ -78,15 +40,6 @@ OK, WARNING, DISCARD, ERROR, FATAL = range(5)
 ENTRY_MODULE_REFERENCES = []
 
 _TYPES = {"Real": float, "Integer": int, "Boolean": bool, "String": str}
-
-
-def sampled_description(summary, inputs, period="Ts"):
-    """A sampled FMU's modelDescription description: ``summary`` and the semantics of its clock."""
-    return (
-        f"{summary}. Samples {inputs} at startTime + k*{period} whatever the communication steps, each sample "
-        f"taking the value set at the last communication point at or before its instant; between samples the "
-        f"outputs hold the newest sample's, and inputs set there are used from the next sample on"
-    )
 
 
 class LogMessage:
@@ -102,87 +55,52 @@ class LogMessage:
         self.debug = False
 
 
-class Variable:
-    """One scalar variable of modelDescription.xml."""
-
-    __slots__ = ("name", "vr", "type", "causality", "variability", "start", "unit", "description", "minimum", "maximum")
-
-    def __init__(self, name, vr, type_, causality, variability, start, unit, description, minimum=None, maximum=None):
-        self.name, self.vr, self.type = name, vr, type_
-        self.causality, self.variability = causality, variability
-        self.start, self.unit, self.description = start, unit, description
-        self.minimum, self.maximum = minimum, maximum
-
-
 class Fmi2Slave:
-    """Base of the shapefmu slaves (the class name is what pythonfmu's export library looks for)."""
+    """The slave of every shapefmu FMU (the class name is what pythonfmu's export library looks for);
+    the FMU's entry module derives one whose ``model_class`` is its kind's ``Model``."""
 
-    model_name = None
-    description = ""
-    default_experiment = (0.0, 1.0, 1e-3)  # start, stop, step (s)
-    kernels = ()
-    state_attributes = ()
+    model_class = None
     # Written by the builder into resources/: start values baked into this FMU and its identity.
     build_file = "shapefmu_build.json"
 
     def __init__(self, instance_name="instance", resources=None, logger=None, visible=False, **_ignored):
+        interface = self.model_class.interface
+        self.model_name = interface.name
         self.instance_name = instance_name
         self.log_queue = []
-        self.variables = []
-        self.by_name = {}
+        self.variables = list(interface.variables)  # value reference = position
+        self.by_name = {v.name: v for v in self.variables}
         self._by_type = {t: {} for t in _TYPES}
-        self.values = {}
+        for vr, v in enumerate(self.variables):
+            self._by_type[v.type][vr] = v
+        self.values = {v.name: (0.0 if v.start is None else v.start) for v in self.variables}
+        self.model = self.model_class(self.values, f"{self.model_name} {instance_name}", self.log)
+        self._kernel_classes = {cls.__name__: cls for cls in self.model.kernels}
         self.phase = "instantiated"
         self.time = 0.0
-        self._kernel_classes = {cls.__name__: cls for cls in self.kernels}
-        self.declare()
         self._input_names = [v.name for v in self.variables if v.causality == "input"]
         self.guid = ""
         self.declared_dependencies = None
         if resources:
             self._load_build(Path(resources) / self.build_file)
 
-    # -- declarations (used by subclasses in declare) --------------------------------------------
+    # The model sees the FMU's time and whether it is stepping.
+    @property
+    def time(self):
+        return self.model.time
 
-    def declare(self):
-        raise NotImplementedError
+    @time.setter
+    def time(self, value):
+        self.model.time = value
 
-    def _add(self, name, type_, causality, variability, start, unit, description, minimum=None, maximum=None):
-        if name in self.by_name:
-            raise ValueError(f"variable {name!r} is declared twice")
-        if not description:
-            raise ValueError(f"variable {name!r} needs a description")
-        if type_ in ("Real",) and unit not in UNITS:
-            raise ValueError(f"variable {name!r}: unit {unit!r} is not in slave_base.UNITS")
-        var = Variable(name, len(self.variables), type_, causality, variability, start, unit, description, minimum, maximum)
-        self.variables.append(var)
-        self.by_name[name] = var
-        self._by_type[type_][var.vr] = var
-        self.values[name] = start
-        return var
+    @property
+    def phase(self):
+        return self._phase
 
-    def parameter(self, name, start, description, unit="1", minimum=None, maximum=None):
-        """A fixed parameter (set before the exit of initialisation); its type follows ``start``."""
-        type_ = {bool: "Boolean", int: "Integer", float: "Real", str: "String"}[type(start)]
-        return self._add(name, type_, "parameter", "fixed", start, unit, description, minimum, maximum)
-
-    def input(self, name, start, description, unit="1"):
-        return self._add(name, "Real", "input", "continuous", float(start), unit, description)
-
-    def output(self, name, description, unit="1", start=0.0):
-        return self._add(name, "Real", "output", "continuous", float(start), unit, description)
-
-    # -- hooks for subclasses --------------------------------------------------------------------
-
-    def initialize(self):
-        """Validate parameters and design the kernels (exit of initialisation)."""
-
-    def step(self, t, h):
-        raise NotImplementedError
-
-    def output_dependencies(self):
-        """``{output name: [input names it depends on at the same instant]}``, after initialize."""
-        return {v.name: [] for v in self.variables if v.causality == "output"}
+    @phase.setter
+    def phase(self, value):
+        self._phase = value
+        self.model.running = value == "step"
 
     # -- logging ---------------------------------------------------------------------------------
 
@@ -209,9 +127,7 @@ class Fmi2Slave:
         self.guid = build.get("guid", "")
         self.declared_dependencies = build.get("dependencies")
         for name, value in build.get("start_values", {}).items():
-            var = self.by_name[name]
-            var.start = _TYPES[var.type](value)
-            self.values[name] = var.start
+            self.values[name] = _TYPES[self.by_name[name].type](value)
 
     # -- FMI calls -------------------------------------------------------------------------------
 
@@ -235,7 +151,7 @@ class Fmi2Slave:
             self.error(f"fmi2ExitInitializationMode is allowed only in initialization mode, not in phase {self.phase}")
             return
         try:
-            self.initialize()
+            self.model.initialize()
             self._check_declared_dependencies()
         except Exception as error:  # noqa: BLE001 - every failure is the host's fmi2Error
             self.phase = "failed"
@@ -246,7 +162,7 @@ class Fmi2Slave:
     def _check_declared_dependencies(self):
         if self.declared_dependencies is None:
             return
-        for output, inputs in self.output_dependencies().items():
+        for output, inputs in self.model.output_dependencies().items():
             missing = set(inputs) - set(self.declared_dependencies.get(output, []))
             if missing:
                 raise ValueError(
@@ -270,7 +186,7 @@ class Fmi2Slave:
                 self.error(f"input {name} is {values[name]!r} at t = {current_time!r}; it must be finite")
                 return False
         try:
-            self.step(current_time, step_size)
+            self.model.step(current_time, step_size)
         except Exception as error:  # noqa: BLE001
             self.error(f"{self.model_name} {self.instance_name}: step at t = {current_time!r} failed: {_describe(error)}")
             return False
@@ -321,12 +237,9 @@ class Fmi2Slave:
                 self.values[var.name] = _TYPES[type_](value)
                 if var.causality == "input":
                     try:
-                        self.input_changed(var.name)
+                        self.model.input_changed(var.name)
                     except Exception as error:  # noqa: BLE001 - see "never raises" in the docstring
                         self.error(f"{self.model_name} {self.instance_name}: input {var.name} = {value!r}: {_describe(error)}")
-
-    def input_changed(self, name):
-        """Called after an input is set: recompute outputs that feed through from it."""
 
     def set_real(self, vrs, values):
         self._set(vrs, values, "Real")
@@ -343,7 +256,7 @@ class Fmi2Slave:
     # -- FMU state -------------------------------------------------------------------------------
 
     def _get_fmu_state(self):
-        kernels = {name: getattr(self, name, None) for name in self.state_attributes}
+        kernels = {name: getattr(self.model, name) for name in self.model.state_attributes}
         try:
             return state_codec.encode(
                 {
@@ -376,7 +289,7 @@ class Fmi2Slave:
             phase, time, kernels = state["phase"], state["time"], state["kernels"]
             if phase not in ("instantiated", "initialization", "step", "failed", "terminated"):
                 raise ValueError(f"unknown phase {phase!r}")
-            if not isinstance(time, float) or set(kernels) != set(self.state_attributes):
+            if not isinstance(time, float) or set(kernels) != set(self.model.state_attributes):
                 raise ValueError("the state's time or kernels are malformed")
             where = state_codec.first_non_finite({"time": time, "values": values, "kernels": kernels}, "state")
             if where is not None:
@@ -388,11 +301,12 @@ class Fmi2Slave:
         except Exception as error:  # noqa: BLE001 - whatever the state holds, it is refused, not raised
             self.error(f"fmi2SetFMUstate: {_describe(error)}")
             return
-        self.values = values
+        self.values.clear()  # in place: the model holds this dict
+        self.values.update(values)
         self.phase = phase
         self.time = time
         for name, kernel in kernels.items():
-            setattr(self, name, kernel)
+            setattr(self.model, name, kernel)
 
     @staticmethod
     def _fmu_state_to_bytes(tree):

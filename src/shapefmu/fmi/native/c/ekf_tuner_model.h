@@ -1,6 +1,6 @@
-/* The contract between the native EKF tuner's model part (ekf_tuner_fmi2.c, written once) and the
+/* The contract between the native EKF tuner's model part (ekf_tuner_part.c, written once) and the
  * model.c that shapefmu.fmi.native.ekf_tuner generates for one build: its variables with their
- * start values and what each one means. Value references follow fmi2_model.h (Real, Integer,
+ * start values and what each one means. Value references follow model.h (Real, Integer,
  * Boolean, String); the names, units and start values are those of the pythonfmu EKFTuner. */
 #ifndef EKF_TUNER_MODEL_H
 #define EKF_TUNER_MODEL_H
@@ -24,6 +24,6 @@ typedef enum {
 } EkfMeaning;
 
 
-extern const TwinVariables ekf_tuner_model;
+extern const VariableTable ekf_tuner_model;
 
 #endif

@@ -1,6 +1,6 @@
 /* The generic FMI 2.0 layer of shapefmu's native FMUs: written once, shared by the plants and every
  * sampled FMU (as src/fmi2Functions.c is shared by the FMI Reference FMUs). The model part is
- * whatever implements fmi2_model.h; what FMI 2.0 and 3.0 do alike is in layer_core.c and
+ * whatever implements model.h; what FMI 2.0 and 3.0 do alike is in layer_core.c and
  * layer_state.c, this is FMI 2.0's API over it.
  *
  * This file: instantiation with the host's memory callbacks and logger, the life cycle of the FMI
@@ -23,7 +23,7 @@
 /* ---------------------------------------------------------------- life cycle */
 
 /* What an FMI 2.0 instance keeps of its host: the callbacks (logger, allocator). */
-static void emit(const Fmi2Instance *inst, int error, const char *category, const char *message) {
+static void emit(const ModelInstance *inst, int error, const char *category, const char *message) {
     const fmi2CallbackFunctions *callbacks = inst->layer;
     if (callbacks->logger == NULL) return;
     /* The logger takes a printf-style format: pass the message as an argument, never as format. */
@@ -41,7 +41,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
                               fmi2Boolean visible, fmi2Boolean loggingOn) {
     (void)fmuResourceLocation;
     (void)visible;
-    Fmi2ModelInfo info;
+    ModelInfo info;
     model_describe(&info);
     if (functions == NULL || functions->allocateMemory == NULL || functions->freeMemory == NULL) {
         log_instantiation_error(functions, instanceName, "the callbacks allocateMemory and freeMemory are required");
@@ -67,7 +67,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
         return NULL;
     }
     *callbacks = *functions;
-    Fmi2Instance *inst = core_new(instanceName, fmuType == fmi2ModelExchange, loggingOn, functions->allocateMemory,
+    ModelInstance *inst = core_new(instanceName, fmuType == fmi2ModelExchange, loggingOn, functions->allocateMemory,
                                   functions->freeMemory, emit, callbacks);
     if (inst == NULL) {
         log_instantiation_error(functions, instanceName, "out of memory");
@@ -80,9 +80,9 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
 void fmi2FreeInstance(fmi2Component c) {
     /* An instance freed already (or never made here) is not touched: see fmu_liveness.h. */
     if (!fmu_mark_freed(c)) return;
-    Fmi2Instance *inst = c;
+    ModelInstance *inst = c;
     core_free(inst);
-    fmi2_release(inst, inst->layer);
+    model_release(inst, inst->layer);
     fmu_retire(c);
 }
 
@@ -96,26 +96,26 @@ fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nC
 
 fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fmi2Real tolerance,
                                fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime) {
-    REQUIRE(c, FMI2_INSTANTIATED, "fmi2SetupExperiment");
+    REQUIRE(c, MODE_INSTANTIATED, "fmi2SetupExperiment");
     (void)toleranceDefined;
     (void)tolerance;
     return core_setup(inst, startTime, stopTimeDefined, stopTime, "fmi2SetupExperiment");
 }
 
 fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
-    REQUIRE(c, FMI2_INSTANTIATED, "fmi2EnterInitializationMode");
-    inst->mode = FMI2_INITIALIZATION;
+    REQUIRE(c, MODE_INSTANTIATED, "fmi2EnterInitializationMode");
+    inst->mode = MODE_INITIALIZATION;
     return fmi2OK;
 }
 
 fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
-    REQUIRE(c, FMI2_INITIALIZATION, "fmi2ExitInitializationMode");
-    return core_exit_initialization(inst);
+    REQUIRE(c, MODE_INITIALIZATION, "fmi2ExitInitializationMode");
+    return core_exit_initialization(inst, "fmi2ExitInitializationMode");
 }
 
 fmi2Status fmi2Terminate(fmi2Component c) {
     REQUIRE(c, RUNNING, "fmi2Terminate");
-    inst->mode = FMI2_TERMINATED;
+    inst->mode = MODE_TERMINATED;
     return fmi2OK;
 }
 
@@ -128,9 +128,9 @@ fmi2Status fmi2Reset(fmi2Component c) {
 /* ---------------------------------------------------------------- get / set */
 
 /* Every vr is a variable of type; logs the first that is not. */
-static fmi2Status check_references(Fmi2Instance *inst, Fmi2Type type, const fmi2ValueReference vr[], size_t nvr,
+static fmi2Status check_references(ModelInstance *inst, ValueType type, const fmi2ValueReference vr[], size_t nvr,
                                    const char *function) {
-    if (type == FMI2_REAL) { /* the usual call, first: Real value references start at 0 */
+    if (type == TYPE_REAL) { /* the usual call, first: Real value references start at 0 */
         size_t i = 0;
         while (i < nvr && vr[i] < inst->info.n_real) i++;
         if (i == nvr) return fmi2OK;
@@ -140,16 +140,16 @@ static fmi2Status check_references(Fmi2Instance *inst, Fmi2Type type, const fmi2
     for (size_t i = 0; i < nvr; i++) {
         if (vr[i] >= first && vr[i] - first < count) continue;
         if (count == 0)
-            return fmi2_fail(inst, "%s: this FMU has no %s variables (value reference %u)", function,
+            return model_fail(inst, "%s: this FMU has no %s variables (value reference %u)", function,
                              CORE_TYPE_NAMES[type], (unsigned)vr[i]);
-        return fmi2_fail(inst, "%s: no %s variable has value reference %u", function, CORE_TYPE_NAMES[type],
+        return model_fail(inst, "%s: no %s variable has value reference %u", function, CORE_TYPE_NAMES[type],
                          (unsigned)vr[i]);
     }
     return fmi2OK;
 }
 
 #define SET_PROLOGUE(type, function)                                                                \
-    REQUIRE(c, FMI2_INSTANTIATED | FMI2_INITIALIZATION | RUNNING, function);                        \
+    REQUIRE(c, MODE_INSTANTIATED | MODE_INITIALIZATION | RUNNING, function);                        \
     REQUIRE_ARRAY(vr, nvr, function);                                                               \
     REQUIRE_ARRAY(value, nvr, function);                                                            \
     if (check_references(inst, type, vr, nvr, function) != fmi2OK) return fmi2Error
@@ -159,66 +159,66 @@ static fmi2Status check_references(Fmi2Instance *inst, Fmi2Type type, const fmi2
     REQUIRE_ARRAY(vr, nvr, function);                                                               \
     REQUIRE_ARRAY(value, nvr, function);                                                            \
     if (check_references(inst, type, vr, nvr, function) != fmi2OK) return fmi2Error;               \
-    if (inst->mode != FMI2_ERROR_STATE && model_update(inst, function) != fmi2OK) return fmi2Error
+    if (inst->mode != MODE_ERROR && model_update(inst, function) != MODEL_OK) return fmi2Error
 
 fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Real value[]) {
-    GET_PROLOGUE(FMI2_REAL, "fmi2GetReal");
+    GET_PROLOGUE(TYPE_REAL, "fmi2GetReal");
     for (size_t i = 0; i < nvr; i++) value[i] = inst->reals[vr[i]];
     return fmi2OK;
 }
 
 fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Integer value[]) {
-    GET_PROLOGUE(FMI2_INTEGER, "fmi2GetInteger");
+    GET_PROLOGUE(TYPE_INTEGER, "fmi2GetInteger");
     for (size_t i = 0; i < nvr; i++) value[i] = inst->integers[vr[i] - inst->info.n_real];
     return fmi2OK;
 }
 
 fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Boolean value[]) {
-    GET_PROLOGUE(FMI2_BOOLEAN, "fmi2GetBoolean");
+    GET_PROLOGUE(TYPE_BOOLEAN, "fmi2GetBoolean");
     for (size_t i = 0; i < nvr; i++) value[i] = inst->booleans[vr[i] - inst->info.n_real - inst->info.n_integer];
     return fmi2OK;
 }
 
 fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2String value[]) {
-    GET_PROLOGUE(FMI2_STRING, "fmi2GetString");
-    for (size_t i = 0; i < nvr; i++) value[i] = fmi2_string(inst, vr[i]);
+    GET_PROLOGUE(TYPE_STRING, "fmi2GetString");
+    for (size_t i = 0; i < nvr; i++) value[i] = model_string(inst, vr[i]);
     return fmi2OK;
 }
 
 fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Real value[]) {
-    SET_PROLOGUE(FMI2_REAL, "fmi2SetReal");
+    SET_PROLOGUE(TYPE_REAL, "fmi2SetReal");
     /* Check every value first, so that a refused call changes nothing. */
     for (size_t i = 0; i < nvr; i++)
-        if (core_accept_real(inst, vr[i], value[i], "fmi2SetReal") != fmi2OK) return fmi2Error;
+        if (core_accept_real(inst, vr[i], value[i], "fmi2SetReal") != MODEL_OK) return fmi2Error;
     for (size_t i = 0; i < nvr; i++) core_store_real(inst, vr[i], value[i]);
     return fmi2OK;
 }
 
-static fmi2Status set_integers(Fmi2Instance *inst, Fmi2Type type, const fmi2ValueReference vr[], size_t nvr,
+static fmi2Status set_integers(ModelInstance *inst, ValueType type, const fmi2ValueReference vr[], size_t nvr,
                                const fmi2Integer value[], const char *function) {
     for (size_t i = 0; i < nvr; i++)
-        if (core_accept_integer(inst, type, vr[i], type == FMI2_BOOLEAN ? value[i] != fmi2False : value[i], function)
-            != fmi2OK)
+        if (core_accept_integer(inst, type, vr[i], type == TYPE_BOOLEAN ? value[i] != fmi2False : value[i], function)
+            != MODEL_OK)
             return fmi2Error;
     for (size_t i = 0; i < nvr; i++)
-        core_store_integer(inst, type, vr[i], type == FMI2_BOOLEAN ? value[i] != fmi2False : value[i]);
+        core_store_integer(inst, type, vr[i], type == TYPE_BOOLEAN ? value[i] != fmi2False : value[i]);
     return fmi2OK;
 }
 
 fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Integer value[]) {
-    SET_PROLOGUE(FMI2_INTEGER, "fmi2SetInteger");
-    return set_integers(inst, FMI2_INTEGER, vr, nvr, value, "fmi2SetInteger");
+    SET_PROLOGUE(TYPE_INTEGER, "fmi2SetInteger");
+    return set_integers(inst, TYPE_INTEGER, vr, nvr, value, "fmi2SetInteger");
 }
 
 fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Boolean value[]) {
-    SET_PROLOGUE(FMI2_BOOLEAN, "fmi2SetBoolean");
-    return set_integers(inst, FMI2_BOOLEAN, vr, nvr, value, "fmi2SetBoolean");
+    SET_PROLOGUE(TYPE_BOOLEAN, "fmi2SetBoolean");
+    return set_integers(inst, TYPE_BOOLEAN, vr, nvr, value, "fmi2SetBoolean");
 }
 
 fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2String value[]) {
-    SET_PROLOGUE(FMI2_STRING, "fmi2SetString");
+    SET_PROLOGUE(TYPE_STRING, "fmi2SetString");
     for (size_t i = 0; i < nvr; i++)
-        if (core_accept_string(inst, vr[i], value[i], "fmi2SetString") != fmi2OK) return fmi2Error;
+        if (core_accept_string(inst, vr[i], value[i], "fmi2SetString") != MODEL_OK) return fmi2Error;
     for (size_t i = 0; i < nvr; i++) core_store_string(inst, vr[i], value[i]);
     return fmi2OK;
 }
@@ -230,7 +230,7 @@ fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference
     REQUIRE(c, ANY_MODE, "fmi2SetRealInputDerivatives");
     (void)vr; (void)order; (void)value;
     if (nvr == 0) return fmi2OK;
-    return fmi2_fail(inst, "fmi2SetRealInputDerivatives: the FMU holds its inputs constant over a step "
+    return model_fail(inst, "fmi2SetRealInputDerivatives: the FMU holds its inputs constant over a step "
                      "(canInterpolateInputs=\"false\")");
 }
 
@@ -239,54 +239,45 @@ fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReferenc
     REQUIRE(c, ANY_MODE, "fmi2GetRealOutputDerivatives");
     (void)vr; (void)order; (void)value;
     if (nvr == 0) return fmi2OK;
-    return fmi2_fail(inst, "fmi2GetRealOutputDerivatives: the FMU provides no output derivatives "
+    return model_fail(inst, "fmi2GetRealOutputDerivatives: the FMU provides no output derivatives "
                      "(maxOutputDerivativeOrder=\"0\")");
 }
 
 fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2Real communicationStepSize,
                       fmi2Boolean noSetFMUStatePriorToCurrentPoint) {
-    REQUIRE(c, FMI2_STEP_COMPLETE, "fmi2DoStep");
+    REQUIRE(c, MODE_STEP_COMPLETE, "fmi2DoStep");
     (void)noSetFMUStatePriorToCurrentPoint;
     return core_do_step(inst, currentCommunicationPoint, communicationStepSize, "fmi2DoStep");
 }
 
 fmi2Status fmi2CancelStep(fmi2Component c) {
-    REQUIRE(c, FMI2_STEP_COMPLETE, "fmi2CancelStep");
-    return fmi2_fail(inst, "fmi2CancelStep: fmi2DoStep never returns fmi2Pending, so there is no step to cancel");
+    REQUIRE(c, MODE_STEP_COMPLETE, "fmi2CancelStep");
+    return model_fail(inst, "fmi2CancelStep: fmi2DoStep never returns fmi2Pending, so there is no step to cancel");
 }
 
 static fmi2Status no_status(fmi2Component c, fmi2StatusKind s, const char *function) {
     REQUIRE(c, ANY_MODE, function);
-    return fmi2_fail(inst, "%s: status kind %d is not provided (fmi2DoStep is synchronous)", function, (int)s);
+    return model_fail(inst, "%s: status kind %d is not provided (fmi2DoStep is synchronous)", function, (int)s);
 }
 
-fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status *value) {
-    (void)value;
-    return no_status(c, s, "fmi2GetStatus");
-}
-
-fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *value) {
-    (void)value;
-    return no_status(c, s, "fmi2GetRealStatus");
-}
-
-fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Integer *value) {
-    (void)value;
-    return no_status(c, s, "fmi2GetIntegerStatus");
-}
+/* The status getters this FMU does not provide: one refusal each. */
+#define NO_STATUS(function, type)                                                                    \
+    fmi2Status function(fmi2Component c, const fmi2StatusKind s, type *value) {                    \
+        (void)value;                                                                                \
+        return no_status(c, s, #function);                                                          \
+    }
+NO_STATUS(fmi2GetStatus, fmi2Status)
+NO_STATUS(fmi2GetRealStatus, fmi2Real)
+NO_STATUS(fmi2GetIntegerStatus, fmi2Integer)
+NO_STATUS(fmi2GetStringStatus, fmi2String)
 
 fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean *value) {
     REQUIRE(c, ANY_MODE, "fmi2GetBooleanStatus");
-    if (value == NULL) return fmi2_fail(inst, "fmi2GetBooleanStatus: value is NULL");
+    if (value == NULL) return model_fail(inst, "fmi2GetBooleanStatus: value is NULL");
     if (s == fmi2Terminated) {
         /* Asked after fmi2Discard: this FMU never discards, and never asks to terminate. */
         *value = fmi2False;
         return fmi2OK;
     }
-    return fmi2_fail(inst, "fmi2GetBooleanStatus: status kind %d is not provided", (int)s);
-}
-
-fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2String *value) {
-    (void)value;
-    return no_status(c, s, "fmi2GetStringStatus");
+    return model_fail(inst, "fmi2GetBooleanStatus: status kind %d is not provided", (int)s);
 }

@@ -1,6 +1,6 @@
 /* Shared by the two files of the generic FMI 2.0 layer only (fmi2_layer.c, fmi2_layer_me.c): the
- * standard's FMI 2.0 API first (its fmi2Status is the one model_status.h then leaves alone), the
- * version-neutral core, and the entry guards. Model parts include fmi2_model.h, not this. */
+ * standard's FMI 2.0 API, the version-neutral core (whose ModelStatus has fmi2Status's values), and
+ * the entry guards. Model parts include model.h, not this. */
 #ifndef FMI2_LAYER_H
 #define FMI2_LAYER_H
 
@@ -11,7 +11,7 @@
 #define REQUIRE_ARRAY(pointer, count, function) GUARD_ARRAY(pointer, count, function, fmi2Error)
 #define REQUIRE_TYPE(wanted, function)                                                              \
     if (inst->model_exchange != ((wanted) == fmi2ModelExchange))                                    \
-    return fmi2_fail(inst, "%s: only for %s instances", function,                                   \
-                     (wanted) == fmi2ModelExchange ? "Model Exchange" : "Co-Simulation")
+    return (fmi2Status)model_fail(inst, "%s: only for %s instances", function,                      \
+                                  (wanted) == fmi2ModelExchange ? "Model Exchange" : "Co-Simulation")
 
 #endif

@@ -1,7 +1,7 @@
 /* Model Exchange functions, directional derivatives and FMU states of the generic FMI 2.0 layer.
  *
  * The continuous states and their derivatives are Real variables at the value references the
- * model part declares (Fmi2ModelInfo.state_vr, derivative_vr); the core (layer_core.c) checks the
+ * model part declares (ModelInfo.state_vr, derivative_vr); the core (layer_core.c) checks the
  * calls and their arguments and asks the model part to recompute (model_update) or linearise
  * (model_partial_derivative). The models have no event indicators and no time events. FMU states
  * are layer_state.c's.
@@ -9,14 +9,14 @@
 #include "fmi2_layer.h"
 
 fmi2Status fmi2EnterEventMode(fmi2Component c) {
-    REQUIRE(c, FMI2_EVENT_MODE | FMI2_CONTINUOUS_TIME, "fmi2EnterEventMode");
+    REQUIRE(c, MODE_EVENT | MODE_CONTINUOUS_TIME, "fmi2EnterEventMode");
     REQUIRE_TYPE(fmi2ModelExchange, "fmi2EnterEventMode");
-    inst->mode = FMI2_EVENT_MODE;
+    inst->mode = MODE_EVENT;
     return fmi2OK;
 }
 
 fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *eventInfo) {
-    REQUIRE(c, FMI2_EVENT_MODE, "fmi2NewDiscreteStates");
+    REQUIRE(c, MODE_EVENT, "fmi2NewDiscreteStates");
     REQUIRE_TYPE(fmi2ModelExchange, "fmi2NewDiscreteStates");
     REQUIRE_ARRAY(eventInfo, 1, "fmi2NewDiscreteStates");
     eventInfo->newDiscreteStatesNeeded = fmi2False;
@@ -29,32 +29,32 @@ fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *eventInfo) {
 }
 
 fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c) {
-    REQUIRE(c, FMI2_EVENT_MODE, "fmi2EnterContinuousTimeMode");
+    REQUIRE(c, MODE_EVENT, "fmi2EnterContinuousTimeMode");
     REQUIRE_TYPE(fmi2ModelExchange, "fmi2EnterContinuousTimeMode");
-    inst->mode = FMI2_CONTINUOUS_TIME;
+    inst->mode = MODE_CONTINUOUS_TIME;
     return fmi2OK;
 }
 
 fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStatePriorToCurrentPoint,
                                        fmi2Boolean *enterEventMode, fmi2Boolean *terminateSimulation) {
-    REQUIRE(c, FMI2_CONTINUOUS_TIME, "fmi2CompletedIntegratorStep");
+    REQUIRE(c, MODE_CONTINUOUS_TIME, "fmi2CompletedIntegratorStep");
     REQUIRE_TYPE(fmi2ModelExchange, "fmi2CompletedIntegratorStep");
     (void)noSetFMUStatePriorToCurrentPoint;
     if (enterEventMode == NULL || terminateSimulation == NULL)
-        return fmi2_fail(inst, "fmi2CompletedIntegratorStep: NULL enterEventMode or terminateSimulation");
+        return model_fail(inst, "fmi2CompletedIntegratorStep: NULL enterEventMode or terminateSimulation");
     *enterEventMode = fmi2False;
     *terminateSimulation = fmi2False;
     return fmi2OK;
 }
 
 fmi2Status fmi2SetTime(fmi2Component c, fmi2Real time) {
-    REQUIRE(c, FMI2_EVENT_MODE | FMI2_CONTINUOUS_TIME, "fmi2SetTime");
+    REQUIRE(c, MODE_EVENT | MODE_CONTINUOUS_TIME, "fmi2SetTime");
     REQUIRE_TYPE(fmi2ModelExchange, "fmi2SetTime");
     return core_set_time(inst, time, "fmi2SetTime");
 }
 
 fmi2Status fmi2SetContinuousStates(fmi2Component c, const fmi2Real x[], size_t n) {
-    REQUIRE(c, FMI2_CONTINUOUS_TIME, "fmi2SetContinuousStates");
+    REQUIRE(c, MODE_CONTINUOUS_TIME, "fmi2SetContinuousStates");
     return core_set_states(inst, x, n, "fmi2SetContinuousStates");
 }
 
@@ -67,7 +67,7 @@ fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real eventIndicators[], s
     REQUIRE(c, AFTER_INSTANTIATION, "fmi2GetEventIndicators");
     REQUIRE_TYPE(fmi2ModelExchange, "fmi2GetEventIndicators");
     (void)eventIndicators;
-    if (ni != 0) return fmi2_fail(inst, "fmi2GetEventIndicators: the FMU has no event indicators, got ni = %zu", ni);
+    if (ni != 0) return model_fail(inst, "fmi2GetEventIndicators: the FMU has no event indicators, got ni = %zu", ni);
     return fmi2OK;
 }
 
@@ -84,7 +84,7 @@ fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real x_nominal
 fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference vUnknown_ref[], size_t nUnknown,
                                         const fmi2ValueReference vKnown_ref[], size_t nKnown,
                                         const fmi2Real dvKnown[], fmi2Real dvUnknown[]) {
-    REQUIRE(c, FMI2_INITIALIZATION | RUNNING | FMI2_TERMINATED, "fmi2GetDirectionalDerivative");
+    REQUIRE(c, MODE_INITIALIZATION | RUNNING | MODE_TERMINATED, "fmi2GetDirectionalDerivative");
     REQUIRE_ARRAY(vUnknown_ref, nUnknown, "fmi2GetDirectionalDerivative");
     REQUIRE_ARRAY(dvUnknown, nUnknown, "fmi2GetDirectionalDerivative");
     REQUIRE_ARRAY(vKnown_ref, nKnown, "fmi2GetDirectionalDerivative");
@@ -96,7 +96,7 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
 /* ---------------------------------------------------------------- FMU states */
 
 fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
-    REQUIRE(c, ANY_MODE & ~FMI2_ERROR_STATE, "fmi2GetFMUstate");
+    REQUIRE(c, ANY_MODE & ~MODE_ERROR, "fmi2GetFMUstate");
     return core_get_state(inst, FMUstate, "fmi2GetFMUstate");
 }
 

@@ -1,5 +1,5 @@
 /* The generic FMI 3.0 layer of shapefmu's native FMUs: FMI 3.0's API over the same model parts
- * (fmi2_model.h) and the same version-neutral core (layer_core.c, layer_state.c) as the FMI 2.0
+ * (model.h) and the same version-neutral core (layer_core.c, layer_state.c) as the FMI 2.0
  * layer, so an FMI 3.0 FMU and its FMI 2.0 twin compute the same numbers in the same order.
  *
  * This file: instantiation (Model Exchange and Co-Simulation; Scheduled Execution is refused), the
@@ -32,15 +32,15 @@ static size_t element_base(const char *name) {
 }
 
 /* The variable table of fmi3_layer.h, from the model's slots; 0 on success. */
-static int build_table(Fmi2Instance *inst, Fmi3Layer *layer) {
-    const Fmi2ModelInfo *info = &inst->info;
+static int build_table(ModelInstance *inst, Fmi3Layer *layer) {
+    const ModelInfo *info = &inst->info;
     const size_t n_slots = info->n_real + info->n_integer + info->n_boolean + info->n_string;
     size_t *group = calloc(n_slots + 1, sizeof(size_t));        /* each slot's variable, 0: none */
     const char **base = calloc(n_slots + 1, sizeof(char *));    /* each variable's name (or base) */
     size_t *base_length = calloc(n_slots + 1, sizeof(size_t));  /* 0 for a scalar */
     layer->first = calloc(n_slots + 2, sizeof(size_t));
     layer->slots = calloc(n_slots + 1, sizeof(size_t));
-    layer->types = calloc(n_slots + 1, sizeof(Fmi2Type));
+    layer->types = calloc(n_slots + 1, sizeof(ValueType));
     layer->scalar = calloc(n_slots + 1, sizeof(size_t));
     if (!group || !base || !base_length || !layer->first || !layer->slots || !layer->types || !layer->scalar) {
         free(group), free(base), free(base_length);
@@ -48,34 +48,34 @@ static int build_table(Fmi2Instance *inst, Fmi3Layer *layer) {
     }
     size_t n = 0, last_array = 0;
     layer->period_slot = SIZE_MAX;
-    for (int type = FMI2_REAL; type <= FMI2_STRING; type++) {
+    for (int type = TYPE_REAL; type <= TYPE_STRING; type++) {
         size_t first, count;
-        core_type_range(inst, (Fmi2Type)type, &first, &count);
+        core_type_range(inst, (ValueType)type, &first, &count);
         for (size_t slot = first; slot < first + count; slot++) {
             const char *name = NULL;
-            const Fmi2Role role = model_variable(inst, (Fmi2Type)type, slot, &name);
-            if (role == FMI2_NO_VARIABLE || (role == FMI2_COMPUTED && type == FMI2_REAL && strcmp(name, "time") == 0))
+            const VariableRole role = model_variable(inst, (ValueType)type, slot, &name);
+            if (role == ROLE_NONE || (role == ROLE_COMPUTED && type == TYPE_REAL && strcmp(name, "time") == 0))
                 continue;
-            if (type == FMI2_REAL && (strcmp(name, "Ts_used") == 0
+            if (type == TYPE_REAL && (strcmp(name, "Ts_used") == 0
                                       || (strcmp(name, "Ts") == 0 && layer->period_slot == SIZE_MAX)))
                 layer->period_slot = slot;  /* a ShapeFilter's Ts_used (Ts adjusted) before Ts */
             /* parameters only: the quantities that are one (impulse times, taps, mode frequencies) */
-            const int parameter = role == FMI2_PARAMETER_FIXED || role == FMI2_PARAMETER_TUNABLE;
+            const int parameter = role == ROLE_PARAMETER_FIXED || role == ROLE_PARAMETER_TUNABLE;
             const size_t length = parameter ? element_base(name) : 0;
             size_t k = 0;
             if (length > 0) {  /* the array this element belongs to: usually the last one */
-                if (last_array && layer->types[last_array] == (Fmi2Type)type && base_length[last_array] == length
+                if (last_array && layer->types[last_array] == (ValueType)type && base_length[last_array] == length
                     && strncmp(base[last_array], name, length) == 0)
                     k = last_array;
                 for (size_t j = 1; k == 0 && j <= n; j++)
-                    if (layer->types[j] == (Fmi2Type)type && base_length[j] == length && strncmp(base[j], name, length) == 0)
+                    if (layer->types[j] == (ValueType)type && base_length[j] == length && strncmp(base[j], name, length) == 0)
                         k = j;
             }
             if (k == 0) {
                 k = ++n;
                 base[k] = name;
                 base_length[k] = length;
-                layer->types[k] = (Fmi2Type)type;
+                layer->types[k] = (ValueType)type;
             }
             if (length > 0) last_array = k;
             group[slot] = k;
@@ -114,12 +114,12 @@ static const char *const FMI3_TYPE_NAMES[4] = {"Float64", "Int32", "Boolean", "S
 
 /* Every vr names a variable of type (time counts as a Float64 one where time_allowed) and the values
  * are as many as their elements; logs the first that is not. */
-static fmi3Status check_request(Fmi2Instance *inst, Fmi2Type type, const fmi3ValueReference vr[], size_t nvr,
+static fmi3Status check_request(ModelInstance *inst, ValueType type, const fmi3ValueReference vr[], size_t nvr,
                                 size_t n_values, int time_allowed, const char *function) {
     const Fmi3Layer *layer = layer_of(inst);
     size_t total = 0;
     for (size_t i = 0; i < nvr; i++) {
-        if (vr[i] == 0 && type == FMI2_REAL) {
+        if (vr[i] == 0 && type == TYPE_REAL) {
             if (!time_allowed) return FAIL("%s: time (value reference 0) is the independent variable and cannot be set", function);
             total++;
             continue;
@@ -140,10 +140,10 @@ static fmi3Status check_request(Fmi2Instance *inst, Fmi2Type type, const fmi3Val
     return fmi3OK;
 }
 
-int fmi3_scalar_slot(Fmi2Instance *inst, fmi3ValueReference vr, Fmi2Type type, size_t *slot, const char *function) {
+int fmi3_scalar_slot(ModelInstance *inst, fmi3ValueReference vr, ValueType type, size_t *slot, const char *function) {
     const Fmi3Layer *layer = layer_of(inst);
     if (vr == 0 || vr > layer->n_variables || layer->types[vr] != type || elements_of(layer, vr) != 1) {
-        fmi2_fail(inst, "%s: value reference %u is no scalar %s variable", function, (unsigned)vr, FMI3_TYPE_NAMES[type]);
+        model_fail(inst, "%s: value reference %u is no scalar %s variable", function, (unsigned)vr, FMI3_TYPE_NAMES[type]);
         return 0;
     }
     *slot = slots_of(layer, vr)[0];
@@ -152,7 +152,7 @@ int fmi3_scalar_slot(Fmi2Instance *inst, fmi3ValueReference vr, Fmi2Type type, s
 
 /* ---------------------------------------------------------------- life cycle */
 
-static void emit(const Fmi2Instance *inst, int error, const char *category, const char *message) {
+static void emit(const ModelInstance *inst, int error, const char *category, const char *message) {
     const Fmi3Layer *layer = layer_of(inst);
     if (layer->log != NULL) layer->log(layer->environment, error ? fmi3Error : fmi3OK, category, message);
 }
@@ -166,7 +166,7 @@ static void free_layer(Fmi3Layer *layer) {
 static fmi3Instance instantiate(fmi3String name, fmi3String token, int model_exchange, int event_mode_used,
                                 fmi3Boolean logging_on, fmi3InstanceEnvironment environment, fmi3LogMessageCallback log,
                                 const char *function) {
-    Fmi2ModelInfo info;
+    ModelInfo info;
     model_describe(&info);
     const char *why = NULL;
     if (name == NULL || name[0] == '\0') why = "instanceName must be a non-empty string";
@@ -183,7 +183,7 @@ static fmi3Instance instantiate(fmi3String name, fmi3String token, int model_exc
               "modelDescription.xml): instantiate it with eventModeUsed = fmi3False, or build it with --clock";
     Fmi3Layer *layer = why == NULL ? calloc(1, sizeof(Fmi3Layer)) : NULL;
     if (why == NULL && layer == NULL) why = "out of memory";
-    Fmi2Instance *inst = NULL;
+    ModelInstance *inst = NULL;
     if (why == NULL) {
         layer->environment = environment;
         layer->log = log;
@@ -246,7 +246,7 @@ fmi3Instance fmi3InstantiateScheduledExecution(fmi3String instanceName, fmi3Stri
 void fmi3FreeInstance(fmi3Instance instance) {
     /* An instance freed already (or never made here) is not touched: see fmu_liveness.h. */
     if (!fmu_mark_freed(instance)) return;
-    Fmi2Instance *inst = instance;
+    ModelInstance *inst = instance;
     core_free(inst);
     free_layer(layer_of(inst));
     fmu_retire(instance);
@@ -268,22 +268,22 @@ fmi3Status fmi3SetDebugLogging(fmi3Instance instance, fmi3Boolean loggingOn, siz
 
 fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean toleranceDefined, fmi3Float64 tolerance,
                                        fmi3Float64 startTime, fmi3Boolean stopTimeDefined, fmi3Float64 stopTime) {
-    ENTER(instance, FMI2_INSTANTIATED, "fmi3EnterInitializationMode");
+    ENTER(instance, MODE_INSTANTIATED, "fmi3EnterInitializationMode");
     (void)toleranceDefined, (void)tolerance;
-    if (core_setup(inst, startTime, stopTimeDefined, stopTime, "fmi3EnterInitializationMode") != fmi2OK) return fmi3Error;
-    inst->mode = FMI2_INITIALIZATION;
+    if (core_setup(inst, startTime, stopTimeDefined, stopTime, "fmi3EnterInitializationMode") != MODEL_OK) return fmi3Error;
+    inst->mode = MODE_INITIALIZATION;
     return fmi3OK;
 }
 
 fmi3Status fmi3ExitInitializationMode(fmi3Instance instance) {
-    ENTER(instance, FMI2_INITIALIZATION, "fmi3ExitInitializationMode");
-    if (core_exit_initialization(inst) != fmi2OK) return fmi3Error;
+    ENTER(instance, MODE_INITIALIZATION, "fmi3ExitInitializationMode");
+    if (core_exit_initialization(inst, "fmi3ExitInitializationMode") != MODEL_OK) return fmi3Error;
     return fmi3_clock_start(inst, "fmi3ExitInitializationMode");
 }
 
 fmi3Status fmi3Terminate(fmi3Instance instance) {
     ENTER(instance, RUNNING, "fmi3Terminate");
-    inst->mode = FMI2_TERMINATED;
+    inst->mode = MODE_TERMINATED;
     return fmi3OK;
 }
 
@@ -291,7 +291,7 @@ fmi3Status fmi3Terminate(fmi3Instance instance) {
 
 /* Whether the request is scalar variables of type only, one value each (the usual call: no time, no
  * array), which every get and set checks first: then value i's slot is layer->scalar[vr[i]]. */
-static int scalars_only(const Fmi3Layer *layer, Fmi2Type type, const fmi3ValueReference vr[], size_t nvr,
+static int scalars_only(const Fmi3Layer *layer, ValueType type, const fmi3ValueReference vr[], size_t nvr,
                         size_t n_values) {
     if (nvr != n_values) return 0;
     for (size_t i = 0; i < nvr; i++)  /* vr 0 wraps to the largest value: not a scalar here */
@@ -307,7 +307,7 @@ static int scalars_only(const Fmi3Layer *layer, Fmi2Type type, const fmi3ValueRe
     const Fmi3Layer *layer = layer_of(inst);                                                        \
     const int fast = scalars_only(layer, type, vr, nvr, nValues);                                   \
     if (!fast && check_request(inst, type, vr, nvr, nValues, 1, function) != fmi3OK) return fmi3Error; \
-    if (inst->mode != FMI2_ERROR_STATE && model_update(inst, function) != fmi2OK) return fmi3Error; \
+    if (inst->mode != MODE_ERROR && model_update(inst, function) != MODEL_OK) return fmi3Error; \
     size_t next = 0
 
 #define SET_PROLOGUE(type, function)                                                                \
@@ -327,7 +327,7 @@ static int scalars_only(const Fmi3Layer *layer, Fmi2Type type, const fmi3ValueRe
         }
 
 fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, fmi3Float64 values[], size_t nValues) {
-    GET_PROLOGUE(FMI2_REAL, "fmi3GetFloat64");
+    GET_PROLOGUE(TYPE_REAL, "fmi3GetFloat64");
     if (fast) {
         for (size_t i = 0; i < nvr; i++) values[i] = inst->reals[layer->scalar[vr[i]]];
         return fmi3OK;
@@ -343,7 +343,7 @@ fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], 
 }
 
 fmi3Status fmi3GetInt32(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, fmi3Int32 values[], size_t nValues) {
-    GET_PROLOGUE(FMI2_INTEGER, "fmi3GetInt32");
+    GET_PROLOGUE(TYPE_INTEGER, "fmi3GetInt32");
     for (size_t i = 0; i < nvr; i++)
         for (size_t e = 0; e < elements_of(layer, vr[i]); e++)
             values[next++] = inst->integers[slots_of(layer, vr[i])[e] - inst->info.n_real];
@@ -351,7 +351,7 @@ fmi3Status fmi3GetInt32(fmi3Instance instance, const fmi3ValueReference vr[], si
 }
 
 fmi3Status fmi3GetBoolean(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, fmi3Boolean values[], size_t nValues) {
-    GET_PROLOGUE(FMI2_BOOLEAN, "fmi3GetBoolean");
+    GET_PROLOGUE(TYPE_BOOLEAN, "fmi3GetBoolean");
     for (size_t i = 0; i < nvr; i++)
         for (size_t e = 0; e < elements_of(layer, vr[i]); e++)
             values[next++] = inst->booleans[slots_of(layer, vr[i])[e] - inst->info.n_real - inst->info.n_integer] != 0;
@@ -359,43 +359,43 @@ fmi3Status fmi3GetBoolean(fmi3Instance instance, const fmi3ValueReference vr[], 
 }
 
 fmi3Status fmi3GetString(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, fmi3String values[], size_t nValues) {
-    GET_PROLOGUE(FMI2_STRING, "fmi3GetString");
+    GET_PROLOGUE(TYPE_STRING, "fmi3GetString");
     for (size_t i = 0; i < nvr; i++)
-        for (size_t e = 0; e < elements_of(layer, vr[i]); e++) values[next++] = fmi2_string(inst, slots_of(layer, vr[i])[e]);
+        for (size_t e = 0; e < elements_of(layer, vr[i]); e++) values[next++] = model_string(inst, slots_of(layer, vr[i])[e]);
     return fmi3OK;
 }
 
 /* Every value is checked before any is stored, so that a refused call changes nothing. */
 fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, const fmi3Float64 values[], size_t nValues) {
-    SET_PROLOGUE(FMI2_REAL, "fmi3SetFloat64");
+    SET_PROLOGUE(TYPE_REAL, "fmi3SetFloat64");
     if (fast) {
         for (size_t i = 0; i < nvr; i++)
-            if (core_accept_real(inst, layer->scalar[vr[i]], values[i], "fmi3SetFloat64") != fmi2OK) return fmi3Error;
+            if (core_accept_real(inst, layer->scalar[vr[i]], values[i], "fmi3SetFloat64") != MODEL_OK) return fmi3Error;
         for (size_t i = 0; i < nvr; i++) core_store_real(inst, layer->scalar[vr[i]], values[i]);
         return fmi3OK;
     }
-    FOR_ELEMENTS(if (core_accept_real(inst, slot, values[at], "fmi3SetFloat64") != fmi2OK) return fmi3Error)
+    FOR_ELEMENTS(if (core_accept_real(inst, slot, values[at], "fmi3SetFloat64") != MODEL_OK) return fmi3Error)
     FOR_ELEMENTS(core_store_real(inst, slot, values[at]))
     return fmi3OK;
 }
 
 fmi3Status fmi3SetInt32(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, const fmi3Int32 values[], size_t nValues) {
-    SET_PROLOGUE(FMI2_INTEGER, "fmi3SetInt32");
-    FOR_ELEMENTS(if (core_accept_integer(inst, FMI2_INTEGER, slot, values[at], "fmi3SetInt32") != fmi2OK) return fmi3Error)
-    FOR_ELEMENTS(core_store_integer(inst, FMI2_INTEGER, slot, values[at]))
+    SET_PROLOGUE(TYPE_INTEGER, "fmi3SetInt32");
+    FOR_ELEMENTS(if (core_accept_integer(inst, TYPE_INTEGER, slot, values[at], "fmi3SetInt32") != MODEL_OK) return fmi3Error)
+    FOR_ELEMENTS(core_store_integer(inst, TYPE_INTEGER, slot, values[at]))
     return fmi3OK;
 }
 
 fmi3Status fmi3SetBoolean(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, const fmi3Boolean values[], size_t nValues) {
-    SET_PROLOGUE(FMI2_BOOLEAN, "fmi3SetBoolean");
-    FOR_ELEMENTS(if (core_accept_integer(inst, FMI2_BOOLEAN, slot, values[at] != 0, "fmi3SetBoolean") != fmi2OK) return fmi3Error)
-    FOR_ELEMENTS(core_store_integer(inst, FMI2_BOOLEAN, slot, values[at] != 0))
+    SET_PROLOGUE(TYPE_BOOLEAN, "fmi3SetBoolean");
+    FOR_ELEMENTS(if (core_accept_integer(inst, TYPE_BOOLEAN, slot, values[at] != 0, "fmi3SetBoolean") != MODEL_OK) return fmi3Error)
+    FOR_ELEMENTS(core_store_integer(inst, TYPE_BOOLEAN, slot, values[at] != 0))
     return fmi3OK;
 }
 
 fmi3Status fmi3SetString(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, const fmi3String values[], size_t nValues) {
-    SET_PROLOGUE(FMI2_STRING, "fmi3SetString");
-    FOR_ELEMENTS(if (core_accept_string(inst, slot, values[at], "fmi3SetString") != fmi2OK) return fmi3Error)
+    SET_PROLOGUE(TYPE_STRING, "fmi3SetString");
+    FOR_ELEMENTS(if (core_accept_string(inst, slot, values[at], "fmi3SetString") != MODEL_OK) return fmi3Error)
     FOR_ELEMENTS(core_store_string(inst, slot, values[at]))
     return fmi3OK;
 }
@@ -403,17 +403,17 @@ fmi3Status fmi3SetString(fmi3Instance instance, const fmi3ValueReference vr[], s
 /* ---------------------------------------------------------------- Co-Simulation */
 
 fmi3Status fmi3EnterStepMode(fmi3Instance instance) {
-    ENTER(instance, FMI2_EVENT_MODE | FMI2_STEP_COMPLETE, "fmi3EnterStepMode");
+    ENTER(instance, MODE_EVENT | MODE_STEP_COMPLETE, "fmi3EnterStepMode");
     if (inst->model_exchange) return FAIL("fmi3EnterStepMode: only for Co-Simulation instances");
     if (fmi3_clock_before_step_mode(inst) != fmi3OK) return fmi3Error;
-    inst->mode = FMI2_STEP_COMPLETE;
+    inst->mode = MODE_STEP_COMPLETE;
     return fmi3OK;
 }
 
 fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoint, fmi3Float64 communicationStepSize,
                       fmi3Boolean noSetFMUStatePriorToCurrentPoint, fmi3Boolean *eventHandlingNeeded,
                       fmi3Boolean *terminateSimulation, fmi3Boolean *earlyReturn, fmi3Float64 *lastSuccessfulTime) {
-    ENTER(instance, FMI2_STEP_COMPLETE, "fmi3DoStep");
+    ENTER(instance, MODE_STEP_COMPLETE, "fmi3DoStep");
     (void)noSetFMUStatePriorToCurrentPoint;
     if (!eventHandlingNeeded || !terminateSimulation || !earlyReturn || !lastSuccessfulTime)
         return FAIL("fmi3DoStep: NULL eventHandlingNeeded, terminateSimulation, earlyReturn or lastSuccessfulTime");
@@ -421,7 +421,7 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoi
     *lastSuccessfulTime = inst->time;
     if (layer_of(inst)->clocked && fmi3_clock_before_step(inst, currentCommunicationPoint, communicationStepSize) != fmi3OK)
         return fmi3Error;
-    if (core_do_step(inst, currentCommunicationPoint, communicationStepSize, "fmi3DoStep") != fmi2OK) return fmi3Error;
+    if (core_do_step(inst, currentCommunicationPoint, communicationStepSize, "fmi3DoStep") != MODEL_OK) return fmi3Error;
     fmi3_clock_after_step(inst, currentCommunicationPoint, communicationStepSize);
     *lastSuccessfulTime = inst->time;
     return fmi3OK;

@@ -27,29 +27,29 @@ extern const double fmi3_clock_interval;
 
 int fmi3_clocked(void) { return fmi3_clock_interval > 0.0; }
 
-static fmi3ValueReference clock_reference(const Fmi2Instance *inst) {
+static fmi3ValueReference clock_reference(const ModelInstance *inst) {
     return (fmi3ValueReference)(layer_of(inst)->n_variables + 1);
 }
 
 /* The instant of tick k as a host at t0 + k Ts computes it (for messages). */
-static double tick_time(const Fmi2Instance *inst, double k) { return inst->start_time + k * fmi3_clock_interval; }
+static double tick_time(const ModelInstance *inst, double k) { return inst->start_time + k * fmi3_clock_interval; }
 
-fmi3Status fmi3_clock_start(Fmi2Instance *inst, const char *function) {
+fmi3Status fmi3_clock_start(ModelInstance *inst, const char *function) {
     if (!layer_of(inst)->clocked) return fmi3OK;
     const size_t period_slot = layer_of(inst)->period_slot;
-    if (model_update(inst, function) != fmi2OK) return fmi3Error;
+    if (model_update(inst, function) != MODEL_OK) return fmi3Error;
     const double ts = inst->reals[period_slot];
     if (fabs(ts - fmi3_clock_interval) > 1e-12 * fmi3_clock_interval) {
         const char *name = "Ts";
-        model_variable(inst, FMI2_REAL, period_slot, &name);
+        model_variable(inst, TYPE_REAL, period_slot, &name);
         return FAIL("%s: %s = %.17g, but this FMU's clock 'sample' ticks every %.17g s (its modelDescription.xml): "
                     "rebuild it with --clock for another sample period", function, name, ts, fmi3_clock_interval);
     }
-    inst->mode = FMI2_EVENT_MODE;  /* Co-Simulation with Event Mode starts in Event Mode: the tick at t0 */
+    inst->mode = MODE_EVENT;  /* Co-Simulation with Event Mode starts in Event Mode: the tick at t0 */
     return fmi3OK;
 }
 
-fmi3Status fmi3_clock_before_step(Fmi2Instance *inst, double t, double h) {
+fmi3Status fmi3_clock_before_step(ModelInstance *inst, double t, double h) {
     const GridPosition *at = &inst->clock_position;
     if (inst->clock_ticks < (double)at->k + 1.0)
         return FAIL("fmi3DoStep: the clock 'sample' was not ticked at t = %.17g (enter Event Mode and call fmi3SetClock "
@@ -62,20 +62,20 @@ fmi3Status fmi3_clock_before_step(Fmi2Instance *inst, double t, double h) {
     return fmi3OK;
 }
 
-void fmi3_clock_after_step(Fmi2Instance *inst, double t, double h) {
+void fmi3_clock_after_step(ModelInstance *inst, double t, double h) {
     if (!layer_of(inst)->clocked || !(h > 0.0)) return;
     const GridStep step = grid_step(&inst->clock_position, fmi3_clock_interval, t, h);
     grid_take(&inst->clock_position, &step);
 }
 
-fmi3Status fmi3_clock_before_step_mode(Fmi2Instance *inst) {
+fmi3Status fmi3_clock_before_step_mode(ModelInstance *inst) {
     if (!layer_of(inst)->clocked || inst->clock_ticks >= (double)inst->clock_position.k + 1.0) return fmi3OK;
     return FAIL("fmi3EnterStepMode: t = %.17g is a tick of the clock 'sample', which was not set (fmi3SetClock) in "
                 "this Event Mode", inst->time);
 }
 
 fmi3Status fmi3SetClock(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, const fmi3Clock values[]) {
-    ENTER(instance, FMI2_EVENT_MODE, "fmi3SetClock");
+    ENTER(instance, MODE_EVENT, "fmi3SetClock");
     ENTER_ARRAY(vr, nvr, "fmi3SetClock");
     ENTER_ARRAY(values, nvr, "fmi3SetClock");
     for (size_t i = 0; i < nvr; i++) {

@@ -15,23 +15,23 @@
     if (!inst->model_exchange) return FAIL("%s: only for Model Exchange instances", function)
 
 fmi3Status fmi3EnterEventMode(fmi3Instance instance) {
-    ENTER(instance, FMI2_EVENT_MODE | FMI2_CONTINUOUS_TIME | FMI2_STEP_COMPLETE, "fmi3EnterEventMode");
+    ENTER(instance, MODE_EVENT | MODE_CONTINUOUS_TIME | MODE_STEP_COMPLETE, "fmi3EnterEventMode");
     if (!inst->model_exchange && !layer_of(inst)->clocked)
         return FAIL("fmi3EnterEventMode: this Co-Simulation FMU has no event mode (hasEventMode=\"false\"; build it "
                     "with --clock for one)");
-    inst->mode = FMI2_EVENT_MODE;
+    inst->mode = MODE_EVENT;
     return fmi3OK;
 }
 
 fmi3Status fmi3EvaluateDiscreteStates(fmi3Instance instance) {
-    ENTER(instance, FMI2_EVENT_MODE | FMI2_CONTINUOUS_TIME, "fmi3EvaluateDiscreteStates");
+    ENTER(instance, MODE_EVENT | MODE_CONTINUOUS_TIME, "fmi3EvaluateDiscreteStates");
     return fmi3OK;
 }
 
 fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean *discreteStatesNeedUpdate, fmi3Boolean *terminateSimulation,
                                     fmi3Boolean *nominalsOfContinuousStatesChanged, fmi3Boolean *valuesOfContinuousStatesChanged,
                                     fmi3Boolean *nextEventTimeDefined, fmi3Float64 *nextEventTime) {
-    ENTER(instance, FMI2_EVENT_MODE, "fmi3UpdateDiscreteStates");
+    ENTER(instance, MODE_EVENT, "fmi3UpdateDiscreteStates");
     if (!discreteStatesNeedUpdate || !terminateSimulation || !nominalsOfContinuousStatesChanged
         || !valuesOfContinuousStatesChanged || !nextEventTimeDefined || !nextEventTime)
         return FAIL("fmi3UpdateDiscreteStates: NULL argument");
@@ -42,15 +42,15 @@ fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean *discrete
 }
 
 fmi3Status fmi3EnterContinuousTimeMode(fmi3Instance instance) {
-    ENTER(instance, FMI2_EVENT_MODE, "fmi3EnterContinuousTimeMode");
+    ENTER(instance, MODE_EVENT, "fmi3EnterContinuousTimeMode");
     REQUIRE_MODEL_EXCHANGE("fmi3EnterContinuousTimeMode");
-    inst->mode = FMI2_CONTINUOUS_TIME;
+    inst->mode = MODE_CONTINUOUS_TIME;
     return fmi3OK;
 }
 
 fmi3Status fmi3CompletedIntegratorStep(fmi3Instance instance, fmi3Boolean noSetFMUStatePriorToCurrentPoint,
                                        fmi3Boolean *enterEventMode, fmi3Boolean *terminateSimulation) {
-    ENTER(instance, FMI2_CONTINUOUS_TIME, "fmi3CompletedIntegratorStep");
+    ENTER(instance, MODE_CONTINUOUS_TIME, "fmi3CompletedIntegratorStep");
     (void)noSetFMUStatePriorToCurrentPoint;
     if (enterEventMode == NULL || terminateSimulation == NULL)
         return FAIL("fmi3CompletedIntegratorStep: NULL enterEventMode or terminateSimulation");
@@ -59,13 +59,13 @@ fmi3Status fmi3CompletedIntegratorStep(fmi3Instance instance, fmi3Boolean noSetF
 }
 
 fmi3Status fmi3SetTime(fmi3Instance instance, fmi3Float64 time) {
-    ENTER(instance, FMI2_EVENT_MODE | FMI2_CONTINUOUS_TIME, "fmi3SetTime");
+    ENTER(instance, MODE_EVENT | MODE_CONTINUOUS_TIME, "fmi3SetTime");
     REQUIRE_MODEL_EXCHANGE("fmi3SetTime");
     return (fmi3Status)core_set_time(inst, time, "fmi3SetTime");
 }
 
 fmi3Status fmi3SetContinuousStates(fmi3Instance instance, const fmi3Float64 x[], size_t n) {
-    ENTER(instance, FMI2_CONTINUOUS_TIME | FMI2_EVENT_MODE, "fmi3SetContinuousStates");
+    ENTER(instance, MODE_CONTINUOUS_TIME | MODE_EVENT, "fmi3SetContinuousStates");
     return (fmi3Status)core_set_states(inst, x, n, "fmi3SetContinuousStates");
 }
 
@@ -109,7 +109,7 @@ fmi3Status fmi3GetDirectionalDerivative(fmi3Instance instance, const fmi3ValueRe
                                         const fmi3ValueReference knowns[], size_t nKnowns, const fmi3Float64 seed[],
                                         size_t nSeed, fmi3Float64 sensitivity[], size_t nSensitivity) {
     const char *function = "fmi3GetDirectionalDerivative";
-    ENTER(instance, FMI2_INITIALIZATION | RUNNING | FMI2_TERMINATED, function);
+    ENTER(instance, MODE_INITIALIZATION | RUNNING | MODE_TERMINATED, function);
     ENTER_ARRAY(unknowns, nUnknowns, function);
     ENTER_ARRAY(knowns, nKnowns, function);
     ENTER_ARRAY(seed, nSeed, function);
@@ -117,12 +117,12 @@ fmi3Status fmi3GetDirectionalDerivative(fmi3Instance instance, const fmi3ValueRe
     if (nSeed != nKnowns || nSensitivity != nUnknowns)
         return FAIL("%s: nSeed (%zu) must equal nKnowns (%zu) and nSensitivity (%zu) nUnknowns (%zu): scalar variables only",
                     function, nSeed, nKnowns, nSensitivity, nUnknowns);
-    unsigned int *slots = fmi2_allocate(inst, nUnknowns + nKnowns, sizeof(unsigned int));
+    unsigned int *slots = model_allocate(inst, nUnknowns + nKnowns, sizeof(unsigned int));
     if (nUnknowns + nKnowns > 0 && slots == NULL) return FAIL("%s: out of memory", function);
     fmi3Status status = fmi3OK;
     for (size_t i = 0; i < nUnknowns + nKnowns && status == fmi3OK; i++) {
         size_t slot;
-        if (fmi3_scalar_slot(inst, i < nUnknowns ? unknowns[i] : knowns[i - nUnknowns], FMI2_REAL, &slot, function))
+        if (fmi3_scalar_slot(inst, i < nUnknowns ? unknowns[i] : knowns[i - nUnknowns], TYPE_REAL, &slot, function))
             slots[i] = (unsigned int)slot;
         else
             status = fmi3Error;
@@ -130,14 +130,14 @@ fmi3Status fmi3GetDirectionalDerivative(fmi3Instance instance, const fmi3ValueRe
     if (status == fmi3OK)
         status = (fmi3Status)core_directional_derivative(inst, slots, nUnknowns, slots + nUnknowns, nKnowns, seed,
                                                          sensitivity, function);
-    fmi2_release(inst, slots);
+    model_release(inst, slots);
     return status;
 }
 
 /* ---------------------------------------------------------------- FMU states */
 
 fmi3Status fmi3GetFMUState(fmi3Instance instance, fmi3FMUState *FMUState) {
-    ENTER(instance, ANY_MODE & ~FMI2_ERROR_STATE, "fmi3GetFMUState");
+    ENTER(instance, ANY_MODE & ~MODE_ERROR, "fmi3GetFMUState");
     return (fmi3Status)core_get_state(inst, FMUState, "fmi3GetFMUState");
 }
 

@@ -19,7 +19,7 @@
 
 typedef struct {
     unsigned long long magic, identity;
-    Fmi2Mode mode;
+    InstanceMode mode;
     double time, start_time, clock_ticks;
     GridPosition clock_position;
     double *reals;
@@ -29,11 +29,11 @@ typedef struct {
     size_t model_size;
 } Snapshot;
 
-static size_t string_bytes(const Fmi2Instance *inst) { return inst->info.n_string * (inst->info.string_capacity + 1); }
+static size_t string_bytes(const ModelInstance *inst) { return inst->info.n_string * (inst->info.string_capacity + 1); }
 
 /* FNV-1a of this FMU's GUID and variable counts: the same for every instance of one FMU build. */
-static unsigned long long identity(const Fmi2Instance *inst) {
-    const Fmi2ModelInfo *info = &inst->info;
+static unsigned long long identity(const ModelInstance *inst) {
+    const ModelInfo *info = &inst->info;
     unsigned long long hash = 14695981039346656037ULL;
     for (const unsigned char *c = (const unsigned char *)info->guid; *c != '\0'; c++) hash = (hash ^ *c) * 1099511628211ULL;
     const size_t counts[4] = {info->n_real, info->n_integer, info->n_boolean, info->n_string};
@@ -43,55 +43,55 @@ static unsigned long long identity(const Fmi2Instance *inst) {
 
 /* Whether state is a snapshot this FMU made (a state of another FMU, or a pointer that is no state,
  * is refused rather than read). */
-static int ours(const Fmi2Instance *inst, const void *state) {
+static int ours(const ModelInstance *inst, const void *state) {
     const Snapshot *s = state;
     return s->magic == SNAPSHOT_MAGIC && s->identity == identity(inst);
 }
 
 /* Whether every value of s passes the model's checks of a set call (see the file comment). */
-static fmi2Status check_values(Fmi2Instance *inst, const Snapshot *s, const char *function) {
-    const Fmi2ModelInfo *info = &inst->info;
+static ModelStatus check_values(ModelInstance *inst, const Snapshot *s, const char *function) {
+    const ModelInfo *info = &inst->info;
     const char *name;
     /* the clock's ticks are at most those its position has reached; its period is checked by the FMI 3.0 layer */
     if (!isfinite(s->time) || !isfinite(s->start_time) || !(s->clock_ticks >= 0.0 && s->clock_ticks <= 9e15)
         || s->clock_ticks != floor(s->clock_ticks) || !grid_valid(&s->clock_position, INFINITY)
         || s->clock_ticks > (double)s->clock_position.k + 1.0)
-        return fmi2_fail(inst, "%s: the state's time or clock tick count is not valid", function);
+        return model_fail(inst, "%s: the state's time or clock tick count is not valid", function);
     for (size_t vr = 0; vr < info->n_real; vr++)
-        if (model_variable(inst, FMI2_REAL, vr, &name) != FMI2_NO_VARIABLE
-            && model_check_real(inst, vr, s->reals[vr], function) != fmi2OK)
-            return fmi2Error;
+        if (model_variable(inst, TYPE_REAL, vr, &name) != ROLE_NONE
+            && model_check_real(inst, vr, s->reals[vr], function) != MODEL_OK)
+            return MODEL_ERROR;
     /* Value references run on across the types (fmi2_layer.c, type_range): Integer ones after the Reals. */
     for (size_t i = 0, vr = info->n_real; i < info->n_integer; i++, vr++)
-        if (model_variable(inst, FMI2_INTEGER, vr, &name) != FMI2_NO_VARIABLE
-            && model_check_integer(inst, vr, s->integers[i], function) != fmi2OK)
-            return fmi2Error;
+        if (model_variable(inst, TYPE_INTEGER, vr, &name) != ROLE_NONE
+            && model_check_integer(inst, vr, s->integers[i], function) != MODEL_OK)
+            return MODEL_ERROR;
     for (size_t i = 0, vr = info->n_real + info->n_integer + info->n_boolean; i < info->n_string; i++, vr++)
-        if (model_variable(inst, FMI2_STRING, vr, &name) != FMI2_NO_VARIABLE
-            && model_check_string(inst, vr, s->strings + i * (inst->info.string_capacity + 1), function) != fmi2OK)
-            return fmi2Error;
-    return fmi2OK;
+        if (model_variable(inst, TYPE_STRING, vr, &name) != ROLE_NONE
+            && model_check_string(inst, vr, s->strings + i * (inst->info.string_capacity + 1), function) != MODEL_OK)
+            return MODEL_ERROR;
+    return MODEL_OK;
 }
 
-static void free_snapshot(Fmi2Instance *inst, Snapshot *s) {
+static void free_snapshot(ModelInstance *inst, Snapshot *s) {
     void *buffers[] = {s->reals, s->integers, s->booleans, s->strings, s->model};
-    for (size_t i = 0; i < sizeof buffers / sizeof buffers[0]; i++) fmi2_release(inst, buffers[i]);
+    for (size_t i = 0; i < sizeof buffers / sizeof buffers[0]; i++) model_release(inst, buffers[i]);
     inst->release(s);
 }
 
 /* A snapshot with room for the value arrays and model_size bytes of model data. */
-static Snapshot *new_snapshot(Fmi2Instance *inst, size_t model_size) {
-    Snapshot *s = fmi2_allocate(inst, 1, sizeof(Snapshot));
+static Snapshot *new_snapshot(ModelInstance *inst, size_t model_size) {
+    Snapshot *s = model_allocate(inst, 1, sizeof(Snapshot));
     if (s == NULL) return NULL;
     memset(s, 0, sizeof *s);
     s->magic = SNAPSHOT_MAGIC;
     s->identity = identity(inst);
-    const Fmi2ModelInfo *info = &inst->info;
-    s->reals = fmi2_allocate(inst, info->n_real, sizeof(double));
-    s->integers = fmi2_allocate(inst, info->n_integer, sizeof(int));
-    s->booleans = fmi2_allocate(inst, info->n_boolean, sizeof(int));
-    s->strings = fmi2_allocate(inst, string_bytes(inst), 1);
-    s->model = fmi2_allocate(inst, model_size, 1);
+    const ModelInfo *info = &inst->info;
+    s->reals = model_allocate(inst, info->n_real, sizeof(double));
+    s->integers = model_allocate(inst, info->n_integer, sizeof(int));
+    s->booleans = model_allocate(inst, info->n_boolean, sizeof(int));
+    s->strings = model_allocate(inst, string_bytes(inst), 1);
+    s->model = model_allocate(inst, model_size, 1);
     s->model_size = model_size;
     if ((info->n_real && !s->reals) || (info->n_integer && !s->integers) || (info->n_boolean && !s->booleans)
         || (info->n_string && !s->strings) || (model_size && !s->model)) {
@@ -102,7 +102,7 @@ static Snapshot *new_snapshot(Fmi2Instance *inst, size_t model_size) {
 }
 
 /* A snapshot to write into: *FMUstate if it has the right size, else a new one (the old freed). */
-static Snapshot *writable(Fmi2Instance *inst, void **FMUstate, size_t model_size) {
+static Snapshot *writable(ModelInstance *inst, void **FMUstate, size_t model_size) {
     Snapshot *s = *FMUstate;
     if (s != NULL && s->model_size == model_size) return s;
     if (s != NULL) free_snapshot(inst, s);
@@ -110,22 +110,22 @@ static Snapshot *writable(Fmi2Instance *inst, void **FMUstate, size_t model_size
     return new_snapshot(inst, model_size);
 }
 
-static void copy_values(const Fmi2Instance *inst, double *reals, int *integers, int *booleans, char *strings,
+static void copy_values(const ModelInstance *inst, double *reals, int *integers, int *booleans, char *strings,
                         const double *from_reals, const int *from_integers, const int *from_booleans,
                         const char *from_strings) {
-    const Fmi2ModelInfo *info = &inst->info;
+    const ModelInfo *info = &inst->info;
     if (info->n_real) memcpy(reals, from_reals, info->n_real * sizeof(double));
     if (info->n_integer) memcpy(integers, from_integers, info->n_integer * sizeof(int));
     if (info->n_boolean) memcpy(booleans, from_booleans, info->n_boolean * sizeof(int));
     if (info->n_string) memcpy(strings, from_strings, string_bytes(inst));
 }
 
-fmi2Status core_get_state(Fmi2Instance *inst, void **FMUstate, const char *function) {
-    if (FMUstate == NULL) return fmi2_fail(inst, "%s: FMUstate is NULL", function);
+ModelStatus core_get_state(ModelInstance *inst, void **FMUstate, const char *function) {
+    if (FMUstate == NULL) return model_fail(inst, "%s: FMUstate is NULL", function);
     if (*FMUstate != NULL && !ours(inst, *FMUstate))
-        return fmi2_fail(inst, "%s: *FMUstate is neither NULL nor a state of this FMU", function);
+        return model_fail(inst, "%s: *FMUstate is neither NULL nor a state of this FMU", function);
     Snapshot *s = writable(inst, FMUstate, model_state_size(inst));
-    if (s == NULL) return fmi2_fail(inst, "%s: out of memory", function);
+    if (s == NULL) return model_fail(inst, "%s: out of memory", function);
     s->mode = inst->mode;
     s->time = inst->time;
     s->start_time = inst->start_time;
@@ -135,15 +135,15 @@ fmi2Status core_get_state(Fmi2Instance *inst, void **FMUstate, const char *funct
                 inst->strings);
     model_save_state(inst, s->model);
     *FMUstate = s;
-    return fmi2OK;
+    return MODEL_OK;
 }
 
-fmi2Status core_set_state(Fmi2Instance *inst, const void *FMUstate, const char *function) {
-    if (FMUstate == NULL) return fmi2_fail(inst, "%s: FMUstate is NULL", function);
+ModelStatus core_set_state(ModelInstance *inst, const void *FMUstate, const char *function) {
+    if (FMUstate == NULL) return model_fail(inst, "%s: FMUstate is NULL", function);
     const Snapshot *s = FMUstate;
     if (!ours(inst, s))
-        return fmi2_fail(inst, "%s: the state is not one of this FMU (another FMU's, or no state at all)", function);
-    if (check_values(inst, s, function) != fmi2OK) return fmi2Error;
+        return model_fail(inst, "%s: the state is not one of this FMU (another FMU's, or no state at all)", function);
+    if (check_values(inst, s, function) != MODEL_OK) return MODEL_ERROR;
     copy_values(inst, inst->reals, inst->integers, inst->booleans, inst->strings, s->reals, s->integers, s->booleans,
                 s->strings);
     inst->time = s->time;
@@ -151,19 +151,19 @@ fmi2Status core_set_state(Fmi2Instance *inst, const void *FMUstate, const char *
     inst->clock_ticks = s->clock_ticks;
     inst->clock_position = s->clock_position;
     inst->mode = s->mode;
-    if (model_restore_state(inst, s->model, s->model_size) != 0)
-        return fmi2_fail(inst, "%s: the state does not fit this instance's model data", function);
-    return fmi2OK;
+    if (model_restore_state(inst, s->model, s->model_size, function) != 0)
+        return model_fail(inst, "%s: the state does not fit this instance's model data", function);
+    return MODEL_OK;
 }
 
-fmi2Status core_free_state(Fmi2Instance *inst, void **FMUstate, const char *function) {
-    if (FMUstate == NULL || *FMUstate == NULL) return fmi2OK;
+ModelStatus core_free_state(ModelInstance *inst, void **FMUstate, const char *function) {
+    if (FMUstate == NULL || *FMUstate == NULL) return MODEL_OK;
     const Snapshot *s = *FMUstate;
     if (!ours(inst, s))
-        return fmi2_fail(inst, "%s: the state is not one of this FMU (another FMU's, or no state at all)", function);
+        return model_fail(inst, "%s: the state is not one of this FMU (another FMU's, or no state at all)", function);
     free_snapshot(inst, *FMUstate);
     *FMUstate = NULL;
-    return fmi2OK;
+    return MODEL_OK;
 }
 
 /* Serialised layout: a header of 8 uint64 (magic, identity, the four counts, mode, model bytes), the
@@ -171,17 +171,17 @@ fmi2Status core_free_state(Fmi2Instance *inst, void **FMUstate, const char *func
  * String values and the model bytes. */
 enum { HEADER_WORDS = 8 };
 
-static size_t serial_size(const Fmi2Instance *inst, size_t model_size) {
-    const Fmi2ModelInfo *info = &inst->info;
+static size_t serial_size(const ModelInstance *inst, size_t model_size) {
+    const ModelInfo *info = &inst->info;
     return HEADER_WORDS * sizeof(unsigned long long) + (3 + info->n_real) * sizeof(double) + sizeof(GridPosition)
            + (info->n_integer + info->n_boolean) * sizeof(int) + string_bytes(inst) + model_size;
 }
 
-fmi2Status core_serialized_size(Fmi2Instance *inst, const void *FMUstate, size_t *size, const char *function) {
-    if (FMUstate == NULL || size == NULL) return fmi2_fail(inst, "%s: NULL FMUstate or size", function);
-    if (!ours(inst, FMUstate)) return fmi2_fail(inst, "%s: the state is not one of this FMU", function);
+ModelStatus core_serialized_size(ModelInstance *inst, const void *FMUstate, size_t *size, const char *function) {
+    if (FMUstate == NULL || size == NULL) return model_fail(inst, "%s: NULL FMUstate or size", function);
+    if (!ours(inst, FMUstate)) return model_fail(inst, "%s: the state is not one of this FMU", function);
     *size = serial_size(inst, ((const Snapshot *)FMUstate)->model_size);
-    return fmi2OK;
+    return MODEL_OK;
 }
 
 static unsigned char *put(unsigned char *to, const void *from, size_t bytes) {
@@ -194,16 +194,16 @@ static const unsigned char *take(void *to, const unsigned char *from, size_t byt
     return from + bytes;
 }
 
-fmi2Status core_serialize(Fmi2Instance *inst, const void *FMUstate, unsigned char serializedState[], size_t size,
+ModelStatus core_serialize(ModelInstance *inst, const void *FMUstate, unsigned char serializedState[], size_t size,
                           const char *function) {
     if (FMUstate == NULL || serializedState == NULL)
-        return fmi2_fail(inst, "%s: NULL FMUstate or buffer", function);
+        return model_fail(inst, "%s: NULL FMUstate or buffer", function);
     const Snapshot *s = FMUstate;
-    if (!ours(inst, s)) return fmi2_fail(inst, "%s: the state is not one of this FMU", function);
+    if (!ours(inst, s)) return model_fail(inst, "%s: the state is not one of this FMU", function);
     if (size != serial_size(inst, s->model_size))
-        return fmi2_fail(inst, "%s: buffer holds %zu bytes, the state needs %zu", function, size,
+        return model_fail(inst, "%s: buffer holds %zu bytes, the state needs %zu", function, size,
                          serial_size(inst, s->model_size));
-    const Fmi2ModelInfo *info = &inst->info;
+    const ModelInfo *info = &inst->info;
     const unsigned long long header[HEADER_WORDS] = {SERIAL_MAGIC, identity(inst), info->n_real, info->n_integer,
                                                      info->n_boolean, info->n_string, (unsigned long long)s->mode,
                                                      s->model_size};
@@ -216,33 +216,33 @@ fmi2Status core_serialize(Fmi2Instance *inst, const void *FMUstate, unsigned cha
     p = put(p, s->booleans, info->n_boolean * sizeof(int));
     p = put(p, s->strings, string_bytes(inst));
     put(p, s->model, s->model_size);
-    return fmi2OK;
+    return MODEL_OK;
 }
 
-fmi2Status core_deserialize(Fmi2Instance *inst, const unsigned char serializedState[], size_t size, void **FMUstate,
+ModelStatus core_deserialize(ModelInstance *inst, const unsigned char serializedState[], size_t size, void **FMUstate,
                             const char *function) {
     if (serializedState == NULL || FMUstate == NULL)
-        return fmi2_fail(inst, "%s: NULL buffer or FMUstate", function);
+        return model_fail(inst, "%s: NULL buffer or FMUstate", function);
     if (*FMUstate != NULL && !ours(inst, *FMUstate))
-        return fmi2_fail(inst, "%s: *FMUstate is neither NULL nor a state of this FMU", function);
+        return model_fail(inst, "%s: *FMUstate is neither NULL nor a state of this FMU", function);
     unsigned long long header[HEADER_WORDS];
     if (size < sizeof header)
-        return fmi2_fail(inst, "%s: got %zu bytes, fewer than a state's header", function, size);
+        return model_fail(inst, "%s: got %zu bytes, fewer than a state's header", function, size);
     const unsigned char *p = take(header, (const unsigned char *)serializedState, sizeof header);
-    const Fmi2ModelInfo *info = &inst->info;
+    const ModelInfo *info = &inst->info;
     const int mode_ok = header[6] != 0 && (header[6] & ~(unsigned long long)ANY_MODE) == 0;
     if (header[0] != SERIAL_MAGIC || header[1] != identity(inst) || header[2] != info->n_real
         || header[3] != info->n_integer || header[4] != info->n_boolean || header[5] != info->n_string || !mode_ok
         || header[7] > size)
-        return fmi2_fail(inst, "%s: the bytes are not a serialised state of this FMU", function);
+        return model_fail(inst, "%s: the bytes are not a serialised state of this FMU", function);
     const size_t model_size = (size_t)header[7];
     if (size != serial_size(inst, model_size))
-        return fmi2_fail(inst, "%s: got %zu bytes, a state of this FMU has %zu", function, size,
+        return model_fail(inst, "%s: got %zu bytes, a state of this FMU has %zu", function, size,
                          serial_size(inst, model_size));
     Snapshot *s = writable(inst, FMUstate, model_size);
-    if (s == NULL) return fmi2_fail(inst, "%s: out of memory", function);
+    if (s == NULL) return model_fail(inst, "%s: out of memory", function);
     double times[3];
-    s->mode = (Fmi2Mode)header[6];
+    s->mode = (InstanceMode)header[6];
     p = take(times, p, sizeof times);
     s->time = times[0];
     s->start_time = times[1];
@@ -256,5 +256,5 @@ fmi2Status core_deserialize(Fmi2Instance *inst, const unsigned char serializedSt
     /* Strings are read back as C strings: make every slot end inside itself. */
     for (size_t i = 0; i < info->n_string; i++) s->strings[i * (inst->info.string_capacity + 1) + inst->info.string_capacity] = '\0';
     *FMUstate = s;
-    return fmi2OK;
+    return MODEL_OK;
 }

@@ -1,4 +1,4 @@
-/* The contract between the native profile generator's model part (motion_fmi2.c, written once) and
+/* The contract between the native profile generator's model part (motion_part.c, written once) and
  * the model.c that shapefmu.fmi.native.profiles generates for one build: the variables of the
  * pythonfmu ProfileGenerator with their start values and meanings, the move designed at build time
  * (runtime/motion.py's PiecewiseAcceleration: breaks, levels, the velocity and position accumulated
@@ -30,7 +30,7 @@ typedef struct {
     const double *times, *amplitudes;
 } MotionShaper;
 
-extern const TwinVariables motion_variables;
+extern const VariableTable motion_variables;
 extern const MotionPath motion_path;      /* the build's move */
 extern const MotionShaper motion_shaper;
 

@@ -1,4 +1,4 @@
-/* The contract between the generic FMI 2.0 wrapper (plant_fmi2.c) and a generated model part
+/* The contract between the plants' model part (plant_part.c) and a generated model part
  * (model.c, written by shapefmu.fmi.native for one plant).
  *
  * As in the FMI Reference FMUs, the wrapper is written once and the model part is small: sizes,

@@ -1,6 +1,6 @@
 /* The 4-state resonance EKF of paper 001, eqs. (15)-(26): runtime/ekf.py's ResonanceEKF in C,
  * operation for operation (its module docstring derives the OCR corrections), for the native EKF
- * tuner (ekf_tuner_fmi2.c). The reference phase is 0 (H = [1, 0, 0, 0]) and the tuning is
+ * tuner (ekf_tuner_part.c). The reference phase is 0 (H = [1, 0, 0, 0]) and the tuning is
  * runtime/ekf.py's default_tuning. */
 #include <math.h>
 #include <string.h>

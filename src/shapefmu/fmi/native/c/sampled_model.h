@@ -1,4 +1,4 @@
-/* The contract between the sampled filters' part of the FMI 2.0 layer (sampled_fmi2.c, written
+/* The contract between the sampled filters' model part (sampled_part.c, written
  * once) and the model.c that shapefmu.fmi.native.sampled generates for one native Shaper or
  * ShapeFilter FMU: its variables with their start values, and what each one means.
  *
@@ -11,7 +11,7 @@
 #ifndef SAMPLED_MODEL_H
 #define SAMPLED_MODEL_H
 
-#include "fmi2_model.h"
+#include "model.h"
 
 typedef enum {
     MEANS_INPUT,             /* u */
@@ -32,24 +32,13 @@ typedef enum {
 } SampledMeaning;
 
 typedef struct {
-    const char *name;
-    Fmi2Role role;
-    SampledMeaning meaning;
-    int index;               /* 0-based i - 1 of name[i] */
-    double start;            /* Real, Integer and Boolean start values */
-    const char *string_start;
-} SampledVariable;
-
-typedef struct {
-    const char *guid;
     int impulses;            /* 1: a Shaper (impulses), 0: a ShapeFilter (taps) */
     int closed_form;         /* a Shaper whose kind re-designs in C */
     int feedthrough;         /* y declared to depend on u (ModelStructure) */
     int max_modes;           /* f[1..max_modes], zeta[1..max_modes] */
     int capacity;            /* impulse_time/impulse_amplitude or tap entries */
     double ts_used;          /* a ShapeFilter's sampling period */
-    size_t n_real, n_integer, n_boolean, n_string;
-    const SampledVariable *variables;  /* by value reference: Real, Integer, Boolean, String */
+    VariableTable variables; /* by value reference: Real, Integer, Boolean, String; meaning: a SampledMeaning */
 } SampledModel;
 
 extern const SampledModel sampled_model;

@@ -1,4 +1,4 @@
-/* The contract between the native STOS controller's model part (stos_fmi2.c, written once) and the
+/* The contract between the native STOS controller's model part (stos_part.c, written once) and the
  * model.c that shapefmu.fmi.native.stos generates for one build: the variables of the pythonfmu
  * STOSController with their start values and meanings (StosMeaning), and the build's shaper (the
  * switching curves are designed from it in C, stos_law.c). */
@@ -29,7 +29,7 @@ typedef struct {
     const double *times, *amplitudes;
 } StosShaper;
 
-extern const TwinVariables stos_variables;
+extern const VariableTable stos_variables;
 extern const StosShaper stos_shaper;
 
 #endif

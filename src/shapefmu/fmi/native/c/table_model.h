@@ -1,11 +1,11 @@
-/* The contract between the native reference player's model part (table_fmi2.c, written once) and
+/* The contract between the native reference player's model part (table_part.c, written once) and
  * the model.c that shapefmu.fmi.native.reference generates for one build: the variables of the
  * pythonfmu ReferencePlayer and its signal table, parsed at build time by runtime/reference_player.py
  * (the distinct times, the values arriving at and leaving each, the running integral). */
 #ifndef TABLE_MODEL_H
 #define TABLE_MODEL_H
 
-#include "fmi2_model.h"
+#include "model.h"
 
 typedef struct {
     const char *guid;

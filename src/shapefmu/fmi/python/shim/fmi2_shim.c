@@ -311,29 +311,17 @@ EXPORT fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefi
         INSTANTIATED);
 }
 
-EXPORT fmi2Status fmi2EnterInitializationMode(fmi2Component c)
-{
-    BEGIN(c, INSTANTIATED);
-    return advance(s, inner.EnterInitializationMode(s->component), INITIALIZATION);
-}
-
-EXPORT fmi2Status fmi2ExitInitializationMode(fmi2Component c)
-{
-    BEGIN(c, INITIALIZATION);
-    return advance(s, inner.ExitInitializationMode(s->component), STEP_COMPLETE);
-}
-
-EXPORT fmi2Status fmi2Terminate(fmi2Component c)
-{
-    BEGIN(c, STEP_COMPLETE);
-    return advance(s, inner.Terminate(s->component), TERMINATED);
-}
-
-EXPORT fmi2Status fmi2Reset(fmi2Component c)
-{
-    BEGIN(c, ANY_MODE);
-    return advance(s, inner.Reset(s->component), INSTANTIATED);
-}
+/* The transitions without arguments: called in mode `from`, in mode `to` once the model agrees. */
+#define TRANSITION(Name, from, to)                                                                 \
+    EXPORT fmi2Status fmi2##Name(fmi2Component c)                                                  \
+    {                                                                                              \
+        BEGIN(c, from);                                                                            \
+        return advance(s, inner.Name(s->component), to);                                           \
+    }
+TRANSITION(EnterInitializationMode, INSTANTIATED, INITIALIZATION)
+TRANSITION(ExitInitializationMode, INITIALIZATION, STEP_COMPLETE)
+TRANSITION(Terminate, STEP_COMPLETE, TERMINATED)
+TRANSITION(Reset, ANY_MODE, INSTANTIATED)
 
 /* The setters: before, in and after initialisation, not once terminated or after an error. */
 #define SETTABLE (INSTANTIATED | INITIALIZATION | STEP_COMPLETE)
@@ -444,32 +432,15 @@ EXPORT fmi2Status fmi2CancelStep(fmi2Component c)
     return unsupported(c, "fmi2CancelStep: doStep never runs asynchronously here");
 }
 
-EXPORT fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind kind, fmi2Status* value)
-{
-    (void)kind; (void)value;
-    return unsupported(c, "fmi2GetStatus: doStep never runs asynchronously here");
-}
-
-EXPORT fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind kind, fmi2Real* value)
-{
-    (void)kind; (void)value;
-    return unsupported(c, "fmi2GetRealStatus: doStep never runs asynchronously here");
-}
-
-EXPORT fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind kind, fmi2Integer* value)
-{
-    (void)kind; (void)value;
-    return unsupported(c, "fmi2GetIntegerStatus: doStep never runs asynchronously here");
-}
-
-EXPORT fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind kind, fmi2Boolean* value)
-{
-    (void)kind; (void)value;
-    return unsupported(c, "fmi2GetBooleanStatus: doStep never runs asynchronously here");
-}
-
-EXPORT fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind kind, fmi2String* value)
-{
-    (void)kind; (void)value;
-    return unsupported(c, "fmi2GetStringStatus: doStep never runs asynchronously here");
-}
+/* The status getters: doStep never runs asynchronously, so there is no status to give. */
+#define UNSUPPORTED_STATUS(function, type)                                                           \
+    EXPORT fmi2Status function(fmi2Component c, const fmi2StatusKind kind, type* value)            \
+    {                                                                                               \
+        (void)kind; (void)value;                                                                    \
+        return unsupported(c, #function ": doStep never runs asynchronously here");                 \
+    }
+UNSUPPORTED_STATUS(fmi2GetStatus, fmi2Status)
+UNSUPPORTED_STATUS(fmi2GetRealStatus, fmi2Real)
+UNSUPPORTED_STATUS(fmi2GetIntegerStatus, fmi2Integer)
+UNSUPPORTED_STATUS(fmi2GetBooleanStatus, fmi2Boolean)
+UNSUPPORTED_STATUS(fmi2GetStringStatus, fmi2String)

@@ -42,11 +42,12 @@ the largest) is taken as the zero it is.
 
 import math
 
-from ....runtime import time_frequency, twin_pulse, window_filters
-from ....runtime.checks import check_count, check_finite, check_positive, check_zeta
-from ....runtime.sample_clock import FIR_SAMPLE_SECONDS, SampleClock, samples_per_python_step
-from ....runtime.shaper_filter import FeedthroughFIR, StreamingShaper
-from ..slave_base import Fmi2Slave, sampled_description
+from ...runtime import time_frequency, twin_pulse, window_filters
+from ...runtime.checks import check_count, check_finite, check_positive, check_zeta
+from ...runtime.sample_clock import FIR_SAMPLE_SECONDS, SampleClock, samples_per_python_step
+from ...runtime.shaper_filter import FeedthroughFIR, StreamingShaper
+from .interface import Interface, input_, output, parameter, sampled_description
+from .model import Model as _Model
 
 WINDOW_KINDS = tuple(window_filters.WINDOW_FILTERS)
 KINDS = (*WINDOW_KINDS, *twin_pulse.KINDS, "time-frequency")
@@ -109,34 +110,39 @@ def design_taps(values):
     return design.kernel, ts
 
 
-class ShapeFilter(Fmi2Slave):
-    model_name = "ShapeFilter"
-    description = sampled_description(
+INTERFACE = Interface(
+    "ShapeFilter",
+    sampled_description(
         "Sampled shape filter (window filters of order n, twin-pulse kernels, time-frequency), designed from its "
         "parameters", "u", "Ts_used"
-    )
+    ),
+    (
+        parameter("kind", "hanning", f"filter design: {', '.join(KINDS)}"),
+        parameter("f", 10.0, "natural frequency of the mode (time-frequency: its first resonance)", unit="Hz"),
+        parameter("zeta", 0.0, "damping ratio of the mode, in [0, 1); window filters only (others need 0)",
+                  minimum=0.0),
+        parameter("order", 1, "robustness order n of a window filter: its n-fold self-convolution (eq. 1)", minimum=1),
+        parameter("Ts", 1e-3, "sampling period of the filter: u is sampled at startTime + k*Ts", unit="s"),
+        parameter("adjust_Ts", False, "window filters: use the nearest Ts that makes the window length whole"),
+        parameter("c", 0.25, "weight C of the side Hanning windows of three-hanning (section 7), >= 0", minimum=0.0),
+        parameter("base", "hanning", f"base window of differenced and convolved: {', '.join(BASES)}"),
+        parameter("delta_f", 0.0, "null mis-alignment of the M- twin-pulse kinds, in [0, f)", unit="Hz", minimum=0.0),
+        parameter("null", 2, "null index k of the TP:BC twin pulse (eq. 3)", minimum=1),
+        parameter("move_time", 0.1, "time-frequency move time M*Ts, a whole number >= 2 of Ts", unit="s"),
+        parameter("u0", 0.0, "command before the start time (the filter starts at rest on it)"),
+        input_("u", 0.0, "command to shape"),
+        output("y", "shaped command: the taps times the delayed command samples"),
+        output("Ts_used", "sampling period in force: Ts, or the adjusted one (adjust_Ts)", unit="s"),
+    ),
+    command_in="u",
+    command_out="y",
+)
+
+
+class Model(_Model):
+    interface = INTERFACE
     kernels = (FeedthroughFIR, StreamingShaper, SampleClock)
     state_attributes = ("fir", "taps", "clock")
-
-    def declare(self):
-        self.parameter("kind", "hanning", f"filter design: {', '.join(KINDS)}")
-        self.parameter("f", 10.0, "natural frequency of the mode (time-frequency: its first resonance)", unit="Hz")
-        self.parameter("zeta", 0.0, "damping ratio of the mode, in [0, 1); window filters only (others need 0)")
-        self.parameter("order", 1, "robustness order n of a window filter: its n-fold self-convolution (eq. 1)", minimum=1)
-        self.parameter("Ts", 1e-3, "sampling period of the filter: u is sampled at startTime + k*Ts", unit="s")
-        self.parameter("adjust_Ts", False, "window filters: use the nearest Ts that makes the window length whole")
-        self.parameter("c", 0.25, "weight C of the side Hanning windows of three-hanning (section 7), >= 0")
-        self.parameter("base", "hanning", f"base window of differenced and convolved: {', '.join(BASES)}")
-        self.parameter("delta_f", 0.0, "null mis-alignment of the M- twin-pulse kinds, in [0, f)", unit="Hz")
-        self.parameter("null", 2, "null index k of the TP:BC twin pulse (eq. 3)", minimum=1)
-        self.parameter("move_time", 0.1, "time-frequency move time M*Ts, a whole number >= 2 of Ts", unit="s")
-        self.parameter("u0", 0.0, "command before the start time (the filter starts at rest on it)")
-        self.input("u", 0.0, "command to shape")
-        self.output("y", "shaped command: the taps times the delayed command samples")
-        self.output("Ts_used", "sampling period in force: Ts, or the adjusted one (adjust_Ts)", unit="s")
-        self.fir = None
-        self.taps = None
-        self.clock = None
 
     def initialize(self):
         values = self.values
@@ -159,6 +165,10 @@ class ShapeFilter(Fmi2Slave):
         """DefaultExperiment (start, stop, step): one sample per step, four filter lengths."""
         ts = self.values["Ts_used"]
         return 0.0, ts * max(10, 4 * len(self.taps)), ts
+
+    def picture(self):
+        """The filter's taps."""
+        return [("stems", list(enumerate(self.taps)))]
 
     def input_changed(self, name):
         if self.fir is not None:

@@ -22,50 +22,54 @@ called once per sample with those inputs.
 
 import math
 
-from ....runtime import shaper_designs
-from ....runtime.checks import check_count, check_finite, check_positive
-from ....runtime.sample_clock import STOS_SAMPLE_SECONDS, SampleClock, samples_per_python_step
-from ....runtime.stos import STOSKernel, stos_curves
-from ..slave_base import Fmi2Slave, sampled_description
+from ...runtime import shaper_designs
+from ...runtime.checks import check_count, check_finite, check_positive
+from ...runtime.sample_clock import STOS_SAMPLE_SECONDS, SampleClock, samples_per_python_step
+from ...runtime.stos import STOSKernel, stos_curves
+from .interface import Interface, input_, mode_parameters, output, parameter, sampled_description
+from .model import Model as _Model
 
 MAX_MODES = 4
 SETTLE_GAINS = ("kp", "kd", "ki", "x_enter", "v_enter", "x_exit", "v_exit")
 
 
-class STOSController(Fmi2Slave):
-    model_name = "STOSController"
-    description = sampled_description(
+INTERFACE = Interface(
+    "STOSController",
+    sampled_description(
         "Shaped time-optimal servomechanism (STOS, paper 002): bang-bang closed loop that spares the modes",
         "target, x_r and x_r_dot",
-    )
+    ),
+    (
+        parameter("b", 2.7e3, "rigid-body input gain: x_r'' = -damping x_r' + b u", unit="m/s2"),
+        parameter("U", 11.0, "input limit |u| <= U"),
+        parameter("damping", 0.0, "rigid-body velocity damping (Kt^2/(R J) with back EMF)", unit="1/s", minimum=0.0),
+        parameter("kind", "simultaneous", f"shaper the law is built from: {', '.join(shaper_designs.KINDS)}"),
+        parameter("n", 1, "derivative order of zv_dn (0 = ZV, 1 = ZVD, ...)", minimum=0),
+        parameter("n_modes", 2, f"number of modes, 1..{MAX_MODES}", minimum=1, maximum=MAX_MODES),
+        *mode_parameters(MAX_MODES, "f", "Hz", lambda i: 1000.0 * (i + 1), 0.01),
+        parameter("Ts", 1e-5, "sampling period of the control law", unit="s"),
+        parameter("settle", False, "hand over to the linear settle law near the target"),
+        parameter("kp", 0.0, "settle law position gain", unit="1/m"),
+        parameter("kd", 0.0, "settle law velocity gain", unit="s/m"),
+        parameter("ki", 0.0, "settle law integral gain", unit="1/(m.s)"),
+        parameter("x_enter", 1e-6, "settle region: position error at which the settle law takes over", unit="m"),
+        parameter("v_enter", 1e-3, "settle region: velocity at which the settle law takes over", unit="m/s"),
+        parameter("x_exit", 2e-6, "position error beyond which the settle law lets go", unit="m"),
+        parameter("v_exit", 2e-3, "velocity beyond which the settle law lets go", unit="m/s"),
+        input_("target", 0.0, "target position", unit="m"),
+        input_("x_r", 0.0, "measured rigid-body position", unit="m"),
+        input_("x_r_dot", 0.0, "measured rigid-body velocity", unit="m/s"),
+        output("u", "control input, |u| <= U"),
+    ),
+    command_in="target",
+    command_out="u",
+)
+
+
+class Model(_Model):
+    interface = INTERFACE
     kernels = (STOSKernel, SampleClock)
     state_attributes = ("kernel", "clock")
-
-    def declare(self):
-        self.parameter("b", 2.7e3, "rigid-body input gain: x_r'' = -damping x_r' + b u", unit="m/s2")
-        self.parameter("U", 11.0, "input limit |u| <= U")
-        self.parameter("damping", 0.0, "rigid-body velocity damping (Kt^2/(R J) with back EMF)", unit="1/s")
-        self.parameter("kind", "simultaneous", f"shaper the law is built from: {', '.join(shaper_designs.KINDS)}")
-        self.parameter("n", 1, "derivative order of zv_dn (0 = ZV, 1 = ZVD, ...)", minimum=0)
-        self.parameter("n_modes", 2, f"number of modes, 1..{MAX_MODES}", minimum=1, maximum=MAX_MODES)
-        for i in range(1, MAX_MODES + 1):
-            self.parameter(f"f[{i}]", 1000.0 * (i + 1), f"natural frequency of mode {i}", unit="Hz")
-            self.parameter(f"zeta[{i}]", 0.01, f"damping ratio of mode {i}, in [0, 1)")
-        self.parameter("Ts", 1e-5, "sampling period of the control law", unit="s")
-        self.parameter("settle", False, "hand over to the linear settle law near the target")
-        self.parameter("kp", 0.0, "settle law position gain", unit="1/m")
-        self.parameter("kd", 0.0, "settle law velocity gain", unit="s/m")
-        self.parameter("ki", 0.0, "settle law integral gain", unit="1/(m.s)")
-        self.parameter("x_enter", 1e-6, "settle region: position error at which the settle law takes over", unit="m")
-        self.parameter("v_enter", 1e-3, "settle region: velocity at which the settle law takes over", unit="m/s")
-        self.parameter("x_exit", 2e-6, "position error beyond which the settle law lets go", unit="m")
-        self.parameter("v_exit", 2e-3, "velocity beyond which the settle law lets go", unit="m/s")
-        self.input("target", 0.0, "target position", unit="m")
-        self.input("x_r", 0.0, "measured rigid-body position", unit="m")
-        self.input("x_r_dot", 0.0, "measured rigid-body velocity", unit="m/s")
-        self.output("u", "control input, |u| <= U")
-        self.kernel = None
-        self.clock = None
 
     def initialize(self):
         values = self.values
@@ -100,6 +104,20 @@ class STOSController(Fmi2Slave):
         """DefaultExperiment: 2000 samples."""
         ts = self.values["Ts"]
         return 0.0, 2000 * ts, ts
+
+    def picture(self):
+        """The rigid body's bang-bang (accelerate, then brake, each twice the shaper long) shaped by the
+        law's impulses, which spare the modes: a staircase up, across and back."""
+        times, amplitudes = self.kernel.curves["times"], self.kernel.curves["amplitudes"]
+        half = 2.0 * times[-1]
+        edges = sorted({t + shift for t in times for shift in (0.0, half, 2.0 * half)})
+
+        def level(t):
+            return sum(a * ((t >= s) - 2 * (t >= s + half) + (t >= s + 2.0 * half)) for s, a in zip(times, amplitudes))
+
+        levels = [level(0.5 * (a + b)) for a, b in zip(edges, edges[1:])]
+        steps = [point for a, b, u in zip(edges, edges[1:], levels) for point in ((a, u), (b, u))]
+        return [("line", [(edges[0], 0.0), *steps, (edges[-1], 0.0)])]
 
     def input_changed(self, name):
         if self.kernel is not None and all(math.isfinite(self.values[n]) for n in ("target", "x_r", "x_r_dot")):

@@ -1,4 +1,4 @@
-/* The native STOS controller (paper 002) behind the generic FMI 2.0 layer: the C twin of the
+/* The native STOS controller (paper 002) behind the generic FMI layers: the C twin of the
  * pythonfmu STOSController, with the same variables and sampled semantics.
  *
  * At the exit of initialisation the switching curves are designed in C (stos_law.c, runtime/stos.py's
@@ -12,7 +12,7 @@
  * The law runs once per sample of the absolute grid t0 + k Ts (sample_clock.c) with the inputs in
  * effect at that instant. The output u feeds through: at a communication point it is the law
  * evaluated at the current sample's inputs from the committed state, which it leaves as it was
- * (the pythonfmu FMU's _preview); fmi2DoStep commits the samples.
+ * (the pythonfmu FMU's _preview); a step commits the samples.
  */
 #include <math.h>
 #include <stdio.h>
@@ -36,15 +36,15 @@ typedef struct {
     size_t vr[STOS_MEANINGS];
 } Controller;
 
-static Controller *controller_of(const Fmi2Instance *inst) { return (Controller *)inst->model; }
+static Controller *controller_of(const ModelInstance *inst) { return (Controller *)inst->model; }
 
 
-static double real_of(const Fmi2Instance *inst, StosMeaning meaning) {
+static double real_of(const ModelInstance *inst, StosMeaning meaning) {
     return inst->reals[controller_of(inst)->vr[meaning]];
 }
 
 /* The inputs of the current sample: latched, or as set now while it is open. */
-static void current_inputs(const Fmi2Instance *inst, double *inputs) {
+static void current_inputs(const ModelInstance *inst, double *inputs) {
     const Controller *c = controller_of(inst);
     if (c->clock.latched) {
         memcpy(inputs, c->clock.v, 3 * sizeof(double));
@@ -55,7 +55,7 @@ static void current_inputs(const Fmi2Instance *inst, double *inputs) {
 }
 
 /* u for the current sample's inputs from the committed state, which stays as it was. */
-static void preview(Fmi2Instance *inst) {
+static void preview(ModelInstance *inst) {
     Controller *c = controller_of(inst);
     double inputs[3];
     current_inputs(inst, inputs);
@@ -72,58 +72,48 @@ static void commit(void *context, const double *inputs) {
 
 /* ---------------------------------------------------------------- life cycle */
 
-void model_describe(Fmi2ModelInfo *info) {
-    memset(info, 0, sizeof *info);
-    twin_describe(&stos_variables, info);
-}
 
-Fmi2Role model_variable(const Fmi2Instance *inst, Fmi2Type type, size_t vr, const char **name) {
-    (void)inst, (void)type;
-    return twin_variable(&stos_variables, vr, name);
-}
 
-static void release_curves(Fmi2Instance *inst) {
+static void release_curves(ModelInstance *inst) {
     Controller *c = controller_of(inst);
-    fmi2_release(inst, c->storage);
+    model_release(inst, c->storage);
     c->storage = NULL;
 }
 
-void model_reset(Fmi2Instance *inst) {
-    twin_reset(&stos_variables, inst);
+static void reset(ModelInstance *inst) {
     release_curves(inst);
     Controller *c = controller_of(inst);
     c->started = c->dirty = 0;
 }
 
-int model_instantiate(Fmi2Instance *inst) {
-    Controller *c = fmi2_allocate(inst, 1, sizeof(Controller));
+static int instantiate(ModelInstance *inst) {
+    Controller *c = model_allocate(inst, 1, sizeof(Controller));
     if (c == NULL) return -1;
     memset(c, 0, sizeof *c);
     inst->model = c;
     twin_index(&stos_variables, c->vr, STOS_MEANINGS);
-    model_reset(inst);
     return 0;
 }
 
-void model_free(Fmi2Instance *inst) {
+static void free_model(ModelInstance *inst) {
     if (inst->model == NULL) return;
     release_curves(inst);
-    fmi2_release(inst, inst->model);
+    model_release(inst, inst->model);
     inst->model = NULL;
 }
 
 /* The shaper's impulses (re-designed, or the build's) and the curves for the rigid body now. */
-static fmi2Status design(Fmi2Instance *inst, const char *function) {
+static ModelStatus design(ModelInstance *inst, const char *function) {
     Controller *c = controller_of(inst);
     double omega[STOS_MAX_MODES], zeta[STOS_MAX_MODES];
     int count = stos_shaper.count;
     const double *t = stos_shaper.times, *a = stos_shaper.amplitudes;
     double *work = NULL; /* times, amplitudes and the design's scratch of a re-design */
     if (stos_shaper.closed_form) {
-        work = fmi2_allocate(inst, 4 * MAX_IMPULSES, sizeof(double));
-        if (work == NULL) return fmi2_fail(inst, "%s: out of memory for the shaper's design", function);
+        work = model_allocate(inst, 4 * MAX_IMPULSES, sizeof(double));
+        if (work == NULL) return model_fail(inst, "%s: out of memory for the shaper's design", function);
         double *times = work, *amplitudes = work + MAX_IMPULSES, *scratch = work + 2 * MAX_IMPULSES;
-        const char *kind = fmi2_string(inst, c->vr[STOS_KIND]);
+        const char *kind = model_string(inst, c->vr[STOS_KIND]);
         const int n = inst->integers[c->vr[STOS_ORDER] - stos_variables.n_real];
         const int n_modes = inst->integers[c->vr[STOS_MODES] - stos_variables.n_real];
         for (int j = 0; j < n_modes; j++) {
@@ -133,24 +123,23 @@ static fmi2Status design(Fmi2Instance *inst, const char *function) {
         count = design_closed_form(closed_form_kind(kind), n, n_modes, omega, zeta, times, amplitudes, MAX_IMPULSES,
                                    scratch);
         if (count < 0) {
-            fmi2_release(inst, work);
-            return fmi2_fail(inst, "%s: kind %s with n = %d for n_modes = %d has more than %d impulses", function, kind,
+            model_release(inst, work);
+            return model_fail(inst, "%s: kind %s with n = %d for n_modes = %d has more than %d impulses", function, kind,
                              n, n_modes, MAX_IMPULSES);
         }
         t = times, a = amplitudes;
     }
     release_curves(inst);
-    c->storage = fmi2_allocate(inst, STOS_CURVE_DOUBLES(count), sizeof(double));
+    c->storage = model_allocate(inst, STOS_CURVE_DOUBLES(count), sizeof(double));
     const char *unsuited = c->storage == NULL ? "out of memory for the switching curves"
                            : stos_design_curves(&c->curves, c->storage, inst->reals[c->vr[STOS_B]],
                                                 inst->reals[c->vr[STOS_U]], inst->reals[c->vr[STOS_DAMPING]], t, a, count);
-    fmi2_release(inst, work);
-    if (unsuited != NULL) return fmi2_fail(inst, "%s: %s", function, unsuited);
-    return fmi2OK;
+    model_release(inst, work);
+    if (unsuited != NULL) return model_fail(inst, "%s: %s", function, unsuited);
+    return MODEL_OK;
 }
 
-fmi2Status model_exit_initialization(Fmi2Instance *inst) {
-    static const char *const function = "fmi2ExitInitializationMode";
+static ModelStatus exit_initialization(ModelInstance *inst, const char *function) {
     Controller *c = controller_of(inst);
     const double ts = real_of(inst, STOS_PERIOD);
     c->settle_on = inst->booleans[c->vr[STOS_SETTLE] - stos_variables.n_real - stos_variables.n_integer];
@@ -164,97 +153,91 @@ fmi2Status model_exit_initialization(Fmi2Instance *inst) {
             {"x_exit", s.x_exit, s.x_exit >= s.x_enter, ">= x_enter"}, {"v_exit", s.v_exit, s.v_exit >= s.v_enter, ">= v_enter"}};
         for (size_t i = 0; i < sizeof checks / sizeof checks[0]; i++)
             if (!checks[i].ok)
-                return fmi2_fail(inst, "%s: with settle on, %s must be %s, got %g", function, checks[i].name,
+                return model_fail(inst, "%s: with settle on, %s must be %s, got %g", function, checks[i].name,
                                  checks[i].valid, checks[i].value);
         c->settle = s;
     }
-    if (design(inst, function) != fmi2OK) return fmi2Error;
+    if (design(inst, function) != MODEL_OK) return MODEL_ERROR;
     c->state.settling = 0.0, c->state.integral = 0.0;
     clock_start(&c->clock, ts);
     c->started = 1;
     preview(inst);
-    return fmi2OK;
+    return MODEL_OK;
 }
 
-fmi2Status model_update(Fmi2Instance *inst, const char *function) {
+static ModelStatus update(ModelInstance *inst, const char *function) {
     (void)function;
     Controller *c = controller_of(inst);
     if (c->started && c->dirty) preview(inst);
-    return fmi2OK;
+    return MODEL_OK;
 }
 
-fmi2Status model_do_step(Fmi2Instance *inst, double t, double h) {
+static ModelStatus do_step(ModelInstance *inst, double t, double h, const char *function) {
     Controller *c = controller_of(inst);
     const GridStep step = grid_step(&c->clock.at, c->clock.ts, t, h);
     if (step.count > (double)MAX_SAMPLES_PER_STEP)
-        return fmi2_fail(inst, "fmi2DoStep: communication step h = %g s spans %.0f samples of Ts = %g s; at most %lld "
-                         "per step", h, step.count, c->clock.ts, MAX_SAMPLES_PER_STEP);
+        return model_fail(inst, "%s: communication step h = %g s spans %.0f samples of Ts = %g s; at most %lld "
+                         "per step", function, h, step.count, c->clock.ts, MAX_SAMPLES_PER_STEP);
     const double inputs[3] = {real_of(inst, STOS_TARGET), real_of(inst, STOS_POSITION), real_of(inst, STOS_VELOCITY)};
     clock_take(&c->clock, &step, inputs, 3, commit, c);
     preview(inst);
-    return fmi2OK;
+    return MODEL_OK;
 }
 
 /* ---------------------------------------------------------------- values */
 
-static fmi2Status keeps(Fmi2Instance *inst, const TwinVariable *v, const char *given, int same, const char *function) {
-    if (same) return fmi2OK;
+static ModelStatus keeps(ModelInstance *inst, const VariableRow *v, const char *given, int same, const char *function) {
+    if (same) return MODEL_OK;
     return twin_refuse(inst, v, given, "shaper is", "shapefmu build stos-controller --native", function);
 }
 
 static int shaper_parameter(int meaning) { return meaning >= STOS_KIND && meaning <= STOS_ZETA4; }
 
-fmi2Status model_check_real(Fmi2Instance *inst, size_t vr, double value, const char *function) {
-    const TwinVariable *v = &stos_variables.variables[vr];
+static ModelStatus check_real(ModelInstance *inst, size_t vr, double value, const char *function) {
+    const VariableRow *v = &stos_variables.rows[vr];
     const int m = v->meaning;
     const char *valid = !isfinite(value) ? "finite"
                         : (m == STOS_PERIOD || m == STOS_B || m == STOS_U || (m >= STOS_F1 && m <= STOS_F4)) && !(value > 0.0) ? "> 0"
                         : m == STOS_DAMPING && !(value >= 0.0) ? ">= 0"
                         : m >= STOS_ZETA1 && m <= STOS_ZETA4 && !(value >= 0.0 && value < 1.0) ? "in [0, 1)" : NULL;
-    if (valid != NULL) return fmi2_fail(inst, "%s: %s must be %s, got %g", function, v->name, valid, value);
+    if (valid != NULL) return model_fail(inst, "%s: %s must be %s, got %g", function, v->name, valid, value);
     if (shaper_parameter(m) && !stos_shaper.closed_form) {
         char given[32];
         snprintf(given, sizeof given, "%.17g", value);
         return keeps(inst, v, given, value == v->start, function);
     }
-    return fmi2OK;
+    return MODEL_OK;
 }
 
-fmi2Status model_check_integer(Fmi2Instance *inst, size_t vr, int value, const char *function) {
-    const TwinVariable *v = &stos_variables.variables[vr];
+static ModelStatus check_integer(ModelInstance *inst, size_t vr, int value, const char *function) {
+    const VariableRow *v = &stos_variables.rows[vr];
     if (v->meaning == STOS_ORDER && (value < 0 || value > 62))
-        return fmi2_fail(inst, "%s: n must be an integer in [0, 62], got %d", function, value);
+        return model_fail(inst, "%s: n must be an integer in [0, 62], got %d", function, value);
     if (v->meaning == STOS_MODES && (value < 1 || value > STOS_MAX_MODES))
-        return fmi2_fail(inst, "%s: n_modes must be in [1, %d], got %d", function, STOS_MAX_MODES, value);
-    if (!shaper_parameter(v->meaning) || stos_shaper.closed_form) return fmi2OK; /* settle, a Boolean, too */
+        return model_fail(inst, "%s: n_modes must be in [1, %d], got %d", function, STOS_MAX_MODES, value);
+    if (!shaper_parameter(v->meaning) || stos_shaper.closed_form) return MODEL_OK; /* settle, a Boolean, too */
     char given[32];
     snprintf(given, sizeof given, "%d", value);
     return keeps(inst, v, given, value == (int)v->start, function);
 }
 
-fmi2Status model_check_string(Fmi2Instance *inst, size_t vr, const char *value, const char *function) {
-    const TwinVariable *v = &stos_variables.variables[vr];
-    if (stos_shaper.closed_form && closed_form_kind(value) != KIND_NOT_CLOSED_FORM) return fmi2OK;
+static ModelStatus check_string(ModelInstance *inst, size_t vr, const char *value, const char *function) {
+    const VariableRow *v = &stos_variables.rows[vr];
+    if (stos_shaper.closed_form && closed_form_kind(value) != KIND_NOT_CLOSED_FORM) return MODEL_OK;
     if (stos_shaper.closed_form)
-        return fmi2_fail(inst, "%s: kind must be a kind this FMU designs in C (zv, zvd, zvdd, zv_dn, mzv), got %s; "
+        return model_fail(inst, "%s: kind must be a kind this FMU designs in C (zv, zvd, zvdd, zv_dn, mzv), got %s; "
                          "other kinds are designed at build time: shapefmu build stos-controller --native --param "
                          "kind=%s", function, value, value);
     return keeps(inst, v, value, strcmp(value, v->string_start) == 0, function);
 }
 
-void model_changed(Fmi2Instance *inst, size_t vr) {
+static void changed(ModelInstance *inst, size_t vr) {
     Controller *c = controller_of(inst);
-    const StosMeaning meaning = stos_variables.variables[vr].meaning;
+    const StosMeaning meaning = stos_variables.rows[vr].meaning;
     if (meaning == STOS_TARGET || meaning == STOS_POSITION || meaning == STOS_VELOCITY) c->dirty = 1;
 }
 
-void model_states_changed(Fmi2Instance *inst) { (void)inst; }
 
-fmi2Status model_partial_derivative(Fmi2Instance *inst, size_t unknown, size_t known, double *entry,
-                                    const char *function) {
-    (void)unknown, (void)known, (void)entry;
-    return fmi2_fail(inst, "%s: this FMU provides no directional derivatives", function);
-}
 
 /* ---------------------------------------------------------------- state: the Controller's plain data */
 
@@ -267,12 +250,12 @@ typedef struct {
     SampleClock clock;
 } StateBytes;
 
-size_t model_state_size(const Fmi2Instance *inst) {
+static size_t state_size(const ModelInstance *inst) {
     (void)inst;
     return sizeof(StateBytes);
 }
 
-void model_save_state(const Fmi2Instance *inst, unsigned char *bytes) {
+static void save_state(const ModelInstance *inst, unsigned char *bytes) {
     const Controller *c = controller_of(inst);
     StateBytes saved;
     memset(&saved, 0, sizeof saved);
@@ -281,7 +264,7 @@ void model_save_state(const Fmi2Instance *inst, unsigned char *bytes) {
     memcpy(bytes, &saved, sizeof saved);
 }
 
-int model_restore_state(Fmi2Instance *inst, const unsigned char *bytes, size_t size) {
+static int restore_state(ModelInstance *inst, const unsigned char *bytes, size_t size, const char *function) {
     Controller *c = controller_of(inst);
     StateBytes saved;
     if (size != sizeof saved) return -1;
@@ -294,6 +277,13 @@ int model_restore_state(Fmi2Instance *inst, const unsigned char *bytes, size_t s
     c->started = saved.started, c->dirty = saved.dirty, c->settle_on = saved.settle_on;
     c->settle = saved.settle, c->state = saved.state, c->clock = saved.clock;
     /* the curves follow from the parameters the layer has just restored */
-    if (saved.started && design(inst, "fmi2SetFMUstate") != fmi2OK) return -1;
+    if (saved.started && design(inst, function) != MODEL_OK) return -1;
     return 0;
 }
+
+const ModelPart model_part = {
+    .variables = &stos_variables, .instantiate = instantiate, .free = free_model, .reset = reset,
+    .check_real = check_real, .check_integer = check_integer, .check_string = check_string, .changed = changed,
+    .update = update, .exit_initialization = exit_initialization, .do_step = do_step,
+    .state_size = state_size, .save_state = save_state, .restore_state = restore_state,
+};

@@ -20,40 +20,25 @@ Errors name the file, the element and the name: an unknown component or connecto
 whose types or causalities do not fit (output -> input only), an input connected twice, a missing
 FMU file.
 
-Connectors, FMI 3.0 array connectors and parameter values typed by connectors: :mod:`.ssp_connectors`.
+Connectors, FMI 3.0 array connectors and parameter values typed by connectors: :mod:`.connectors`;
+parameter values and .ssv files: :mod:`.values`; reading .ssp and .ssd files: :mod:`.reading`.
 """
 
 from __future__ import annotations
 
-import atexit
 import copy
 import math
 import os
-import shutil
-import tempfile
 import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from xml.etree import ElementTree as ET
 
 from shapefmu.files import check_output, write_bytes, write_file
-from shapefmu.fmi.archives import extract_system
-from shapefmu.fmi.ssp_targets import for_target
-from shapefmu.fmi.ssp_connectors import Connector, checked_values, elements, fmu_connectors, resolve
-from shapefmu.fmi.variable_types import KINDS
+from shapefmu.fmi.ssp.connectors import Connector, checked_values, elements, fmu_connectors, resolve
+from shapefmu.fmi.ssp.targets import for_target
+from shapefmu.fmi.ssp.values import PARAMETER_SET, SSC, SSD, parameter_set, read_ssv
 from shapefmu.runtime.checks import check_finite
-
-SSD = "http://ssp-standard.org/SSP1/SystemStructureDescription"
-SSC = "http://ssp-standard.org/SSP1/SystemStructureCommon"
-SSV = "http://ssp-standard.org/SSP1/SystemStructureParameterValues"
-NAMESPACES = {"ssd": SSD, "ssc": SSC, "ssv": SSV}
-for _prefix, _uri in NAMESPACES.items():
-    ET.register_namespace(_prefix, _uri)
-
-TYPES = KINDS
-# Name of every parameter set we write. ecos applies parameter sets by name at initialisation
-# (``EcosSimulation.init(parameter_set=PARAMETER_SET)``); libcosim applies every binding.
-PARAMETER_SET = "parameters"
 
 
 @dataclass
@@ -248,7 +233,7 @@ class System:
 
         ``target="omsimulator"`` writes the system as OpenModelica's OMSimulator imports it, with
         its fixed macro ``step`` (s) and ``fold`` for linear transformations: see
-        :func:`shapefmu.fmi.ssp_targets.for_target`. The default target (None) writes what
+        :func:`shapefmu.fmi.ssp.targets.for_target`. The default target (None) writes what
         libcosim and ecos read.
         """
         self = for_target(self, target, step, fold)
@@ -296,7 +281,7 @@ class System:
                 if component.parameters:
                     binding = ET.SubElement(bindings, f"{{{SSD}}}ParameterBinding")
                     values = ET.SubElement(binding, f"{{{SSD}}}ParameterValues")
-                    values.append(_parameter_set(PARAMETER_SET, component.parameters, component.connectors))
+                    values.append(parameter_set(PARAMETER_SET, component.parameters, component.connectors))
             item.extend(copy.deepcopy(component.annotations))
         connections = ET.SubElement(system, f"{{{SSD}}}Connections")
         for c in self.connections:
@@ -329,8 +314,8 @@ class System:
 def write_system(system: System, path, target: str | None = None, step: float | None = None, fold: dict | None = None,
                  named: bool = True) -> Path:
     """``system`` to ``path``: an .ssp archive (the FMUs and .ssv files inside) or an .ssd file (they
-    stay where they are), for ``target`` (None, "libcosim", "omsimulator"; see :mod:`.ssp_targets`),
-    whose ``step`` (and ``fold``) it takes; ``named``: as for :func:`write_ssv`."""
+    stay where they are), for ``target`` (None, "libcosim", "omsimulator"; see :mod:`.targets`),
+    whose ``step`` (and ``fold``) it takes; ``named``: as for :func:`~shapefmu.fmi.ssp.values.write_ssv`."""
     path = check_output(path, "system file", named)
     options = {"target": target, "step": step, "fold": fold} if target is not None else {}
     return system.write_ssp(path, **options) if path.suffix.lower() == ".ssp" else system.write_ssd(path, **options)
@@ -343,234 +328,3 @@ def _unique_name(names: dict[Path, str], file: Path, component: str) -> str:
     name = file.name if file.name not in names.values() else f"{component}_{file.name}"
     names[file] = name
     return name
-
-
-def _parameter_set(name: str, values: dict, connectors: dict[str, Connector] | None = None) -> ET.Element:
-    parameter_set = ET.Element(f"{{{SSV}}}ParameterSet", {"version": "1.0", "name": name})
-    parameters = ET.SubElement(parameter_set, f"{{{SSV}}}Parameters")
-    for key, value in values.items():
-        try:  # an array's element is typed by the array's connector
-            connector = resolve(connectors, "", key)[0] if connectors else None
-        except ValueError:
-            connector = None
-        kind = connector.type if connector else _type_of(value)
-        text = str(value).lower() if kind == "Boolean" else (repr(float(value)) if kind == "Real" else str(value))
-        if kind == "Enumeration":  # an ssv:Enumeration value is the item's name
-            text = {number: item for item, number in connector.items.items()}.get(value, text)
-        node = ET.SubElement(parameters, f"{{{SSV}}}Parameter", {"name": key})
-        ET.SubElement(node, f"{{{SSV}}}{kind}", {"value": text})
-    return parameter_set
-
-
-def _type_of(value) -> str:
-    if isinstance(value, bool):
-        return "Boolean"
-    if isinstance(value, int):
-        return "Integer"
-    if isinstance(value, str):
-        return "String"
-    return "Real"
-
-
-def write_ssv(path, parameters: dict, name: str = PARAMETER_SET, named: bool = True) -> Path:
-    """Write ``{variable: value}`` as an SSP 1.0 parameter-value file (.ssv); ``named``: the user named
-    ``path`` (else it is written beside a file they named, and an existing one is refused: ``shapefmu.files``)."""
-    root = _parameter_set(name, parameters)
-    ET.indent(root)
-    return write_bytes(path, ET.tostring(root, encoding="UTF-8", xml_declaration=True), "parameter set", named)
-
-
-def read_ssv(path) -> dict:
-    """``{variable: value}`` from an .ssv file (Real, Integer, Boolean and String values)."""
-    path = Path(path)
-    try:
-        root = ET.parse(path).getroot()
-    except (OSError, ET.ParseError) as error:
-        raise ValueError(f"{path}: cannot read parameter values: {error}") from None
-    return _parameter_values(root, str(path))
-
-
-def _local(tag: str) -> str:
-    return tag.rpartition("}")[2]
-
-
-def _children(node: ET.Element, name: str) -> list[ET.Element]:
-    return [child for child in node if _local(child.tag) == name]
-
-
-def _child(node: ET.Element, name: str) -> ET.Element | None:
-    found = _children(node, name)
-    return found[0] if found else None
-
-
-def _parameter_values(parameter_set: ET.Element, where: str) -> dict:
-    values = {}
-    for parameters in _children(parameter_set, "Parameters"):
-        for parameter in _children(parameters, "Parameter"):
-            name = parameter.get("name")
-            typed = next((child for child in parameter if _local(child.tag) in TYPES), None)
-            if name is None or typed is None or typed.get("value") is None:
-                raise ValueError(f"{where}: Parameter {name!r} needs a name and a Real/Integer/Boolean/String value")
-            text = typed.get("value")
-            kind = _local(typed.tag)
-            try:
-                values[name] = {"Real": float, "Integer": int, "String": str, "Enumeration": str,
-                                "Boolean": lambda s: {"true": True, "false": False, "1": True, "0": False}[s]}[kind](text)
-            except (KeyError, ValueError):
-                raise ValueError(f"{where}: Parameter {name!r} has an invalid {kind} value {text!r}") from None
-    return values
-
-
-def read_ssp(path, fmu_folder=None) -> System:
-    """Read an .ssp archive or an .ssd file (or a folder holding SystemStructure.ssd) into a System.
-
-    The members of an archive that the system uses are extracted, within the size limits, to a
-    temporary folder that lives as long as the process (see :mod:`shapefmu.fmi.archives`).
-    ``fmu_folder``: take each component's FMU from that folder by its file name instead of where its
-    source points (a shipped example system runs with the FMUs ``shapefmu build`` wrote to ./fmus).
-    """
-    path = Path(path)
-    if not path.exists():
-        raise ValueError(f"SSP file not found: {path}")
-    if path.is_dir():
-        if not (path / "SystemStructure.ssd").is_file():
-            raise ValueError(f"{path} is a directory without a SystemStructure.ssd; give an .ssp or .ssd file")
-        path = path / "SystemStructure.ssd"
-    if zipfile.is_zipfile(path):
-        folder = Path(tempfile.mkdtemp(prefix=f"shapefmu_ssp_{path.stem}_"))
-        _TEMPORARY_FOLDERS.append(folder)
-        ssd = extract_system(path, folder)
-        return _read_ssd(ssd, origin=f"{path}!SystemStructure.ssd", fmu_folder=fmu_folder)
-    return _read_ssd(path, origin=str(path), fmu_folder=fmu_folder)
-
-
-_TEMPORARY_FOLDERS: list[Path] = []
-
-
-def _remove_temporary_folders() -> None:
-    for folder in _TEMPORARY_FOLDERS:
-        shutil.rmtree(folder, ignore_errors=True)
-
-
-atexit.register(_remove_temporary_folders)
-
-
-def _read_ssd(ssd: Path, origin: str, fmu_folder=None) -> System:
-    try:
-        root = ET.parse(ssd).getroot()
-    except ET.ParseError as error:
-        raise ValueError(f"{origin}: not valid XML: {error}") from None
-    if _local(root.tag) != "SystemStructureDescription":
-        raise ValueError(f"{origin}: root element must be ssd:SystemStructureDescription, got {_local(root.tag)}")
-    node = _child(root, "System")
-    if node is None:
-        raise ValueError(f"{origin}: no ssd:System element")
-    system = System(node.get("name") or root.get("name") or "system")
-    system.origin = origin
-    base = ssd.parent
-    elements = _child(node, "Elements")
-    for item in elements if elements is not None else []:
-        if _local(item.tag) != "Component":  # a nested ssd:System, an ssd:SignalDictionaryReference
-            raise ValueError(f"{origin}: {_local(item.tag)} {item.get('name')!r} in the Elements of system "
-                             f"{system.name!r} is a nested element, which shapefmu does not run; flatten the "
-                             f"system into components and connections")
-    for item in _children(elements, "Component") if elements is not None else []:
-        name = item.get("name")
-        source = item.get("source")
-        where = f"{origin}: Component {name!r}"
-        if not name or not source:
-            raise ValueError(f"{where}: needs both a name and a source")
-        check_component_name(name, f"{where}: its name")
-        if name in system.components:
-            raise ValueError(f"{where}: a component of that name already exists")
-        fmu = (base / source if fmu_folder is None else Path(fmu_folder) / Path(source).name).resolve()
-        if not fmu.is_file():
-            looked = base if fmu_folder is None else Path(fmu_folder).resolve()
-            raise ValueError(f"{where}: FMU file not found: {source} (looked in {looked})")
-        connectors = fmu_connectors(fmu)
-        declared = _child(item, "Connectors")
-        for connector in _children(declared, "Connector") if declared is not None else []:
-            cname = connector.get("name")
-            try:  # an array's element (u[2]) is a connector too, as SSP tools declare FMI 2.0 array elements
-                variable = resolve(connectors, name, cname or "")[0]
-            except ValueError:
-                raise ValueError(f"{where}: Connector {cname!r} is not a variable of {source}") from None
-            typed = next((_local(c.tag) for c in connector if _local(c.tag) in TYPES), None)
-            if typed is not None and typed != variable.type:
-                raise ValueError(f"{where}: Connector {cname!r} is declared {typed} but the FMU has {variable.type}")
-            kind = connector.get("kind")
-            if kind is not None and kind != variable.kind and kind != "parameter":
-                raise ValueError(f"{where}: Connector {cname!r} is declared {kind} but the FMU has {variable.kind}")
-        component = Component(name, fmu, source, connectors)
-        component.annotations = [copy.deepcopy(a) for a in item if _local(a.tag) == "Annotations"]
-        bindings = _child(item, "ParameterBindings")
-        for binding in _children(bindings, "ParameterBinding") if bindings is not None else []:
-            _read_binding(system, component, binding, base, where)
-        system.components[name] = component
-    system_bindings = _child(node, "ParameterBindings")
-    for binding in _children(system_bindings, "ParameterBinding") if system_bindings is not None else []:
-        _read_binding(system, None, binding, base, f"{origin}: System {system.name!r}")
-    connections = _child(node, "Connections")
-    seen = {}
-    for index, item in enumerate(_children(connections, "Connection") if connections is not None else [], 1):
-        where = f"{origin}: Connection {index}"
-        start_component, end_component = item.get("startElement"), item.get("endElement")
-        if not start_component or not end_component:
-            raise ValueError(f"{where}: connections to the system's own connectors are not supported "
-                             f"(startElement={start_component!r}, endElement={end_component!r})")
-        factor, offset = 1.0, 0.0
-        transformation = _child(item, "LinearTransformation")
-        if transformation is not None:
-            factor = check_finite(transformation.get("factor", 1.0), f"{where}: LinearTransformation factor")
-            offset = check_finite(transformation.get("offset", 0.0), f"{where}: LinearTransformation offset")
-        for other in item:
-            if _local(other.tag) in ("MapTransformation", "BooleanMappingTransformation", "IntegerMappingTransformation"):
-                raise ValueError(f"{where}: {_local(other.tag)} is not supported (only LinearTransformation)")
-        connection = Connection(start_component, item.get("startConnector", ""), end_component,
-                                item.get("endConnector", ""), factor, offset)
-        system._check_connection(connection, f"{where} ({connection.start} -> {connection.end})", seen)
-        system.connections.append(connection)
-    experiment = _child(root, "DefaultExperiment")
-    if experiment is not None:
-        system.start_time = check_finite(experiment.get("startTime", 0.0), f"{origin}: DefaultExperiment startTime")
-        if experiment.get("stopTime") is not None:
-            system.stop_time = check_finite(experiment.get("stopTime"), f"{origin}: DefaultExperiment stopTime")
-        system.experiment_annotations = [copy.deepcopy(a) for a in experiment if _local(a.tag) == "Annotations"]
-    system.annotations = [copy.deepcopy(a) for a in root if _local(a.tag) == "Annotations"]
-    system.system_annotations = [copy.deepcopy(a) for a in node if _local(a.tag) == "Annotations"]
-    return system
-
-
-def _read_binding(system: System, component: Component | None, binding: ET.Element, base: Path, where: str) -> None:
-    """Apply one ssd:ParameterBinding; a system-level binding's names are ``component.variable``."""
-    if _child(binding, "ParameterMapping") is not None:
-        raise ValueError(f"{where}: ParameterMapping is not supported; bind the FMU's variable names directly")
-    prefix = binding.get("prefix", "")
-    source = binding.get("source")
-    if source is not None:
-        ssv = (base / source).resolve()
-        if not ssv.is_file():
-            raise ValueError(f"{where}: ParameterBinding source not found: {source} (looked in {base})")
-        values = read_ssv(ssv)
-    else:
-        inline = _child(binding, "ParameterValues")
-        parameter_set = _child(inline, "ParameterSet") if inline is not None else None
-        if parameter_set is None:
-            raise ValueError(f"{where}: ParameterBinding has neither a source nor inline ssv:ParameterSet values")
-        values = _parameter_values(parameter_set, where)
-        ssv = None
-    for name, value in values.items():
-        name = name[len(prefix):] if prefix and name.startswith(prefix) else name
-        target = component
-        if target is None:
-            component_name, _, name = name.partition(".")
-            target = system.components.get(component_name)
-            if target is None or not name:
-                raise ValueError(f"{where}: parameter binding names unknown component in {component_name + '.' + name!r}")
-        target.parameters.update(system._checked_parameters(target, {name: value}, where))
-    if ssv is not None and component is not None:
-        # Keep the file reference so the system is written back with the same binding; its values
-        # were merged above in file order, and parameter_values() re-reads them in the same order.
-        component.ssv_sources.append(ssv)
-        for name in values:
-            component.parameters.pop(name[len(prefix):] if prefix and name.startswith(prefix) else name, None)

@@ -17,8 +17,9 @@ No inputs, so no output depends on one; the table is fixed at initialisation.
 
 import json
 
-from ....runtime.reference_player import SignalTable, from_dict
-from ..slave_base import Fmi2Slave
+from ...runtime.reference_player import SignalTable, from_dict
+from .interface import Interface, output, parameter
+from .model import Model as _Model
 
 # A rigid-body bang-bang of unit level and length, so that a default build plays something sensible.
 DEFAULT_TABLE = json.dumps({"kind": "signal_table", "interpolation": "hold", "time": [0.0, 0.5, 1.0],
@@ -34,30 +35,39 @@ def parse_table(text):
     return from_dict(data)
 
 
-class ReferencePlayer(Fmi2Slave):
-    model_name = "ReferencePlayer"
-    description = "Plays a signal table (e.g. a time-optimal input) with exact discontinuities"
+INTERFACE = Interface(
+    "ReferencePlayer",
+    "Plays a signal table (e.g. a time-optimal input) with exact discontinuities",
+    (
+        parameter("table", DEFAULT_TABLE, "signal table as JSON: a time_optimal solution or a signal_table"),
+        output("y", "table value at the communication point (right-continuous at switches)"),
+        output("y_mean", "exact mean of the table value over the last communication step"),
+    ),
+    command_in=None,
+    command_out="y",
+)
+
+
+class Model(_Model):
+    interface = INTERFACE
     kernels = (SignalTable,)
     state_attributes = ("table",)
-
-    def declare(self):
-        self.parameter("table", DEFAULT_TABLE, "signal table as JSON: a time_optimal solution or a signal_table")
-        self.output("y", "table value at the communication point (right-continuous at switches)")
-        self.output("y_mean", "exact mean of the table value over the last communication step")
-        self.table = None
 
     def initialize(self):
         self.table = parse_table(self.values["table"])
         self.values["y"] = self.values["y_mean"] = self.table.value(self.time)
-
-    def output_dependencies(self):
-        return {"y": [], "y_mean": []}
 
     def experiment(self):
         """DefaultExperiment: the table and a tenth more, in 1000 steps."""
         end = max(self.table.times[-1], 0.0)
         stop = 1.1 * end if end > 0.0 else 1.0
         return 0.0, stop, stop / 1000.0
+
+    def picture(self):
+        """The table over its span and a tenth more."""
+        start, stop, _ = self.experiment()
+        times = [start + (stop - start) * k / 96 for k in range(97)]
+        return [("line", [(t, self.table.value(t)) for t in times])]
 
     def step(self, t, h):
         self.values["y"] = self.table.value(t + h)

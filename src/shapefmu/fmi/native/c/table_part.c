@@ -1,10 +1,10 @@
-/* The native reference player behind the generic FMI 2.0 layer: the C twin of the pythonfmu
+/* The native reference player behind the generic FMI layers: the C twin of the pythonfmu
  * ReferencePlayer, runtime/reference_player.py's SignalTable operation for operation.
  *
  * Variables (value references): Real 0 y, the table's value at the communication point (right-
  * continuous at switches), Real 1 y_mean, its exact mean over the last step; String 2 table, the
  * JSON text the table was parsed from at build time, which keeps its build value (another one is
- * refused with a message saying to rebuild). No inputs: outputs change only in fmi2DoStep.
+ * refused with a message saying to rebuild). No inputs: outputs change only in a step.
  */
 #include <math.h>
 #include <stdio.h>
@@ -100,92 +100,55 @@ static int is_text(const char *text) {
     return *text == '\0';
 }
 
-/* ---------------------------------------------------------------- FMI hooks */
+/* ---------------------------------------------------------------- the part's hooks */
 
-void model_describe(Fmi2ModelInfo *info) {
-    memset(info, 0, sizeof *info);
+static void describe(ModelInfo *info) {
     info->guid = table_model.guid;
     info->n_real = 2;
     info->n_string = 1;
     const size_t length = text_length();
-    info->string_capacity = length > FMI2_STRING_CAPACITY ? length : FMI2_STRING_CAPACITY;
+    info->string_capacity = length > MODEL_STRING_CAPACITY ? length : MODEL_STRING_CAPACITY;
 }
 
-Fmi2Role model_variable(const Fmi2Instance *inst, Fmi2Type type, size_t vr, const char **name) {
+static VariableRole variable(const ModelInstance *inst, ValueType type, size_t vr, const char **name) {
     static const char *const names[] = {"y", "y_mean", "table"};
     (void)inst, (void)type;
-    if (vr >= VARIABLES) return FMI2_NO_VARIABLE;
+    if (vr >= VARIABLES) return ROLE_NONE;
     *name = names[vr];
-    return vr == VR_TABLE ? FMI2_PARAMETER_FIXED : FMI2_COMPUTED;
+    return vr == VR_TABLE ? ROLE_PARAMETER_FIXED : ROLE_COMPUTED;
 }
 
-void model_reset(Fmi2Instance *inst) {
+static void reset(ModelInstance *inst) {
     inst->reals[VR_Y] = inst->reals[VR_Y_MEAN] = 0.0;
-    copy_text(fmi2_string(inst, VR_TABLE));
+    copy_text(model_string(inst, VR_TABLE));
 }
 
-int model_instantiate(Fmi2Instance *inst) {
-    model_reset(inst);
-    return 0;
-}
-
-void model_free(Fmi2Instance *inst) { (void)inst; }
-
-fmi2Status model_exit_initialization(Fmi2Instance *inst) {
+static ModelStatus exit_initialization(ModelInstance *inst, const char *function) {
+    (void)function;
     inst->reals[VR_Y] = inst->reals[VR_Y_MEAN] = value(inst->start_time);
-    return fmi2OK;
+    return MODEL_OK;
 }
 
-fmi2Status model_update(Fmi2Instance *inst, const char *function) {
-    (void)inst, (void)function;
-    return fmi2OK;
-}
-
-fmi2Status model_do_step(Fmi2Instance *inst, double t, double h) {
+static ModelStatus do_step(ModelInstance *inst, double t, double h, const char *function) {
     if (!isfinite(t + h))
-        return fmi2_fail(inst, "fmi2DoStep: t + h = %g + %g overflows; the step's end must be a finite time", t, h);
+        return model_fail(inst, "%s: t + h = %g + %g overflows; the step's end must be a finite time", function, t, h);
     inst->reals[VR_Y] = value(t + h);
     inst->reals[VR_Y_MEAN] = average(t, t + h);
-    return fmi2OK;
+    return MODEL_OK;
 }
 
-/* Reached only for values the layer lets through: the outputs of a restored FMU state. */
-fmi2Status model_check_real(Fmi2Instance *inst, size_t vr, double value_, const char *function) {
-    if (isfinite(value_)) return fmi2OK;
-    return fmi2_fail(inst, "%s: %s must be finite, got %g", function, vr == VR_Y ? "y" : "y_mean", value_);
-}
-
-fmi2Status model_check_integer(Fmi2Instance *inst, size_t vr, int value_, const char *function) {
-    (void)vr, (void)value_;
-    return fmi2_fail(inst, "%s: this FMU has no Integer or Boolean", function);
-}
-
-fmi2Status model_check_string(Fmi2Instance *inst, size_t vr, const char *text, const char *function) {
+static ModelStatus check_string(ModelInstance *inst, size_t vr, const char *text, const char *function) {
     (void)vr;
-    if (is_text(text)) return fmi2OK;
-    return fmi2_fail(inst, "%s: table is the signal table this native FMU was built with (parsed at build time); got "
+    if (is_text(text)) return MODEL_OK;
+    return model_fail(inst, "%s: table is the signal table this native FMU was built with (parsed at build time); got "
                      "another one of %zu characters (rebuild it with shapefmu build reference TABLE --native for it)",
                      function, strlen(text));
 }
 
-void model_changed(Fmi2Instance *inst, size_t vr) { (void)inst, (void)vr; }
-void model_states_changed(Fmi2Instance *inst) { (void)inst; }
-
-fmi2Status model_partial_derivative(Fmi2Instance *inst, size_t unknown, size_t known, double *entry,
-                                    const char *function) {
-    (void)unknown, (void)known, (void)entry;
-    return fmi2_fail(inst, "%s: this FMU provides no directional derivatives", function);
-}
-
-/* The outputs are values the layer saves; the table is constant: no state of its own. */
-size_t model_state_size(const Fmi2Instance *inst) {
-    (void)inst;
-    return 0;
-}
-
-void model_save_state(const Fmi2Instance *inst, unsigned char *bytes) { (void)inst, (void)bytes; }
-
-int model_restore_state(Fmi2Instance *inst, const unsigned char *bytes, size_t size) {
-    (void)inst, (void)bytes;
-    return size == 0 ? 0 : -1;
-}
+/* The outputs are values the layer saves and checks finite (the default); the table is constant: no
+ * state of its own, no other check. */
+const ModelPart model_part = {
+    .describe = describe, .variable = variable, .reset = reset,
+    .check_string = check_string,
+    .exit_initialization = exit_initialization, .do_step = do_step,
+};

@@ -25,39 +25,57 @@ un-done.
 
 import math
 
-from ....runtime import shaper_designs
-from ....runtime.checks import aliased_modes, check_count, check_finite, check_positive, check_size, check_vtol
-from ....runtime.sample_clock import FIR_SAMPLE_SECONDS, SampleClock, samples_per_python_step
-from ....runtime.shaper_filter import FeedthroughFIR, StreamingShaper, grid_impulses
-from ..slave_base import WARNING, Fmi2Slave, sampled_description
+from ...runtime import shaper_designs
+from ...runtime.checks import aliased_modes, check_count, check_finite, check_positive, check_size, check_vtol
+from ...runtime.sample_clock import FIR_SAMPLE_SECONDS, SampleClock, samples_per_python_step
+from ...runtime.shaper_filter import FeedthroughFIR, StreamingShaper, grid_impulses
+from .interface import Interface, input_, mode_parameters, output, parameter, sampled_description
+from .model import WARNING, Model as _Model
 
 MAX_MODES = 4
 KINDS = shaper_designs.KINDS
 
-
-class Shaper(Fmi2Slave):
-    model_name = "Shaper"
-    description = sampled_description(
+INTERFACE = Interface(
+    "Shaper",
+    sampled_description(
         "Impulse shaper (ZV family, MZV, UM-ZV, EI family, simultaneous multi-mode), designed from its parameters", "u"
-    )
+    ),
+    (
+        parameter("kind", "zvd", f"shaper design: {', '.join(KINDS)}"),
+        parameter("n", 1, "derivative order of zv_dn (0 = ZV, 1 = ZVD, ...)", minimum=0),
+        parameter("vtol", 0.05, "tolerable residual vibration of ei, ei2, ei3, in (0, 0.25]", maximum=0.25),
+        parameter("n_modes", 1, f"number of modes used, 1..{MAX_MODES}", minimum=1, maximum=MAX_MODES),
+        *mode_parameters(MAX_MODES, "f", "Hz", lambda i: 10.0 * i),
+        parameter("Ts", 1e-3, "sampling period of the filter: u is sampled at startTime + k*Ts", unit="s"),
+        parameter("u0", 0.0, "command before the start time (the filter starts at rest on it)"),
+        input_("u", 0.0, "command to shape"),
+        output("y", "shaped command: sum of the impulse amplitudes times the delayed command"),
+    ),
+    command_in="u",
+    command_out="y",
+)
+
+
+def mode_start_values(modes_hz):
+    """The start values of a Shaper (or STOSController) for the modes ``modes_hz``, (f Hz, zeta)
+    pairs: ``n_modes``, ``f[i]`` and ``zeta[i]``.
+
+    >>> mode_start_values([(2000.0, 0.01), (3000.0, 0.01)])["f[2]"]
+    3000.0
+    """
+    if not 1 <= len(modes_hz) <= MAX_MODES:
+        raise ValueError(f"modes must hold 1 to {MAX_MODES} (f Hz, zeta) pairs, got {len(modes_hz)}")
+    values = {"n_modes": len(modes_hz)}
+    for i, (f, zeta) in enumerate(modes_hz, start=1):
+        values[f"f[{i}]"] = f
+        values[f"zeta[{i}]"] = zeta
+    return values
+
+
+class Model(_Model):
+    interface = INTERFACE
     kernels = (FeedthroughFIR, StreamingShaper, SampleClock)
     state_attributes = ("fir", "design", "clock")
-
-    def declare(self):
-        self.parameter("kind", "zvd", f"shaper design: {', '.join(KINDS)}")
-        self.parameter("n", 1, "derivative order of zv_dn (0 = ZV, 1 = ZVD, ...)", minimum=0)
-        self.parameter("vtol", 0.05, "tolerable residual vibration of ei, ei2, ei3, in (0, 0.25]")
-        self.parameter("n_modes", 1, f"number of modes used, 1..{MAX_MODES}", minimum=1, maximum=MAX_MODES)
-        for i in range(1, MAX_MODES + 1):
-            self.parameter(f"f[{i}]", 10.0 * i, f"natural frequency of mode {i}", unit="Hz")
-            self.parameter(f"zeta[{i}]", 0.0, f"damping ratio of mode {i}, in [0, 1)")
-        self.parameter("Ts", 1e-3, "sampling period of the filter: u is sampled at startTime + k*Ts", unit="s")
-        self.parameter("u0", 0.0, "command before the start time (the filter starts at rest on it)")
-        self.input("u", 0.0, "command to shape")
-        self.output("y", "shaped command: sum of the impulse amplitudes times the delayed command")
-        self.fir = None
-        self.design = None
-        self.clock = None
 
     def initialize(self):
         values = self.values
@@ -81,7 +99,7 @@ class Shaper(Fmi2Slave):
         """A mode at or above the Nyquist frequency of Ts is left ringing: say so through the logger."""
         for i in aliased_modes(modes, ts):
             omega, zeta = modes[i]
-            self.log(f"{self.model_name} {self.instance_name}: mode f[{i + 1}] = {self.values[f'f[{i + 1}]']!r} Hz is "
+            self.log(f"{self.owner}: mode f[{i + 1}] = {self.values[f'f[{i + 1}]']!r} Hz is "
                      f"at or above the Nyquist frequency 1/(2 Ts) = {0.5 / ts:.6g} Hz of Ts = {ts!r} s: the sampled "
                      f"shaper cannot cancel it and leaves its vibration (up to all of it); use Ts < "
                      f"{math.pi / (omega * math.sqrt(1.0 - zeta * zeta)):.6g} s", WARNING)
@@ -93,6 +111,10 @@ class Shaper(Fmi2Slave):
         """DefaultExperiment (start, stop, step): one sample per step, four shaper lengths."""
         ts = self.values["Ts"]
         return 0.0, ts * max(10, math.ceil(4.0 * self.design[0][-1] / ts)), ts
+
+    def picture(self):
+        """The impulses the shaper is designed with."""
+        return [("stems", list(zip(*self.design)))]
 
     def input_changed(self, name):
         if self.fir is not None:

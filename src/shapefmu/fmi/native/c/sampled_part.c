@@ -1,4 +1,4 @@
-/* The sampled filters' part of the FMI 2.0 layer: what every native Shaper and ShapeFilter FMU
+/* The sampled filters' model part: what every native Shaper and ShapeFilter FMU
  * (sampled_model.h, a generated model.c) does behind the generic layer. Written once.
  *
  * At the exit of initialisation the design parameters become the taps of a sampled FIR
@@ -11,6 +11,7 @@
  */
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "sampled_fir.h"
@@ -30,39 +31,29 @@ typedef struct {
     /* value references by meaning (first entry of an array); SIZE_MAX if absent */
     size_t u, y, period, rest, kind, order, modes, time, amplitude, tap;
     size_t frequency[MAX_MODES], damping[MAX_MODES]; /* f[i], zeta[i] are interleaved */
-    size_t n_variables;
 } Sampled;
 
-static Sampled *sampled_of(Fmi2Instance *inst) { return (Sampled *)inst->model; }
+static Sampled *sampled_of(ModelInstance *inst) { return (Sampled *)inst->model; }
 
 static size_t n_variables(void) {
-    return sampled_model.n_real + sampled_model.n_integer + sampled_model.n_boolean + sampled_model.n_string;
+    const VariableTable *table = &sampled_model.variables;
+    return table->n_real + table->n_integer + table->n_boolean + table->n_string;
 }
 
-void model_describe(Fmi2ModelInfo *info) {
-    memset(info, 0, sizeof *info);
-    info->guid = sampled_model.guid;
-    info->n_real = sampled_model.n_real;
-    info->n_integer = sampled_model.n_integer;
-    info->n_boolean = sampled_model.n_boolean;
-    info->n_string = sampled_model.n_string;
+/* i - 1 of a variable named base[i] (f[2] -> 1), 0 for a scalar. */
+static int element(const VariableRow *v) {
+    const char *bracket = strchr(v->name, '[');
+    return bracket == NULL ? 0 : atoi(bracket + 1) - 1;
 }
 
-Fmi2Role model_variable(const Fmi2Instance *inst, Fmi2Type type, size_t vr, const char **name) {
-    (void)type;
-    if (vr >= ((const Sampled *)inst->model)->n_variables) return FMI2_NO_VARIABLE;
-    *name = sampled_model.variables[vr].name;
-    return sampled_model.variables[vr].role;
-}
-
-static double period(Fmi2Instance *inst) {
+static double period(ModelInstance *inst) {
     return sampled_model.impulses ? inst->reals[sampled_of(inst)->period] : sampled_model.ts_used;
 }
 
 /* ---------------------------------------------------------------- taps */
 
 /* The largest delay, in samples, of the design in the parameters now. */
-static double longest_delay(Fmi2Instance *inst) {
+static double longest_delay(ModelInstance *inst) {
     const Sampled *s = sampled_of(inst);
     double longest = 0.0;
     if (!sampled_model.impulses) return sampled_model.capacity - 1; /* every tap may be tuned */
@@ -76,7 +67,7 @@ static double longest_delay(Fmi2Instance *inst) {
 
 /* The FIR's taps from the parameters: impulses split onto the grid, added per delay in the order
  * of the impulses (grid_impulses), or the filter's taps. */
-static void regrid(Fmi2Instance *inst) {
+static void regrid(ModelInstance *inst) {
     Sampled *s = sampled_of(inst);
     SampledFir *fir = &s->fir;
     const long length = fir->length;
@@ -103,33 +94,33 @@ static void regrid(Fmi2Instance *inst) {
         }
 }
 
-static void free_line(Fmi2Instance *inst) {
+static void free_line(ModelInstance *inst) {
     Sampled *s = sampled_of(inst);
     void *buffers[] = {s->fir.line, s->fir.tail_offset, s->fir.tail_weight, s->taps};
-    for (size_t i = 0; i < sizeof buffers / sizeof buffers[0]; i++) fmi2_release(inst, buffers[i]);
+    for (size_t i = 0; i < sizeof buffers / sizeof buffers[0]; i++) model_release(inst, buffers[i]);
     s->fir.line = NULL, s->fir.tail_offset = NULL, s->fir.tail_weight = NULL, s->taps = NULL;
     s->fir.length = 0;
 }
 
 /* A delay line of length samples and room for the taps; 0 on success. */
-static int allocate_line(Fmi2Instance *inst, long length) {
+static int allocate_line(ModelInstance *inst, long length) {
     Sampled *s = sampled_of(inst);
     free_line(inst);
     s->fir.length = length;
-    s->fir.line = fmi2_allocate(inst, 2 * (size_t)length, sizeof(double));
-    s->fir.tail_offset = fmi2_allocate(inst, (size_t)length, sizeof(long));
-    s->fir.tail_weight = fmi2_allocate(inst, (size_t)length, sizeof(double));
-    s->taps = fmi2_allocate(inst, (size_t)length + 2, sizeof(double));
+    s->fir.line = model_allocate(inst, 2 * (size_t)length, sizeof(double));
+    s->fir.tail_offset = model_allocate(inst, (size_t)length, sizeof(long));
+    s->fir.tail_weight = model_allocate(inst, (size_t)length, sizeof(double));
+    s->taps = model_allocate(inst, (size_t)length + 2, sizeof(double));
     return s->fir.line && s->fir.tail_offset && s->fir.tail_weight && s->taps ? 0 : -1;
 }
 
 /* ---------------------------------------------------------------- design */
 
-static fmi2Status design(Fmi2Instance *inst, const char *function) {
+static ModelStatus design(ModelInstance *inst, const char *function) {
     Sampled *s = sampled_of(inst);
-    const char *kind = fmi2_string(inst, s->kind);
-    const int n = inst->integers[s->order - sampled_model.n_real];
-    const int n_modes = inst->integers[s->modes - sampled_model.n_real];
+    const char *kind = model_string(inst, s->kind);
+    const int n = inst->integers[s->order - sampled_model.variables.n_real];
+    const int n_modes = inst->integers[s->modes - sampled_model.variables.n_real];
     double omega[MAX_MODES], zeta[MAX_MODES];
     for (int j = 0; j < n_modes; j++) {
         omega[j] = 2.0 * PI * inst->reals[s->frequency[j]];
@@ -139,145 +130,146 @@ static fmi2Status design(Fmi2Instance *inst, const char *function) {
     const int count = design_closed_form(closed_form_kind(kind), n, n_modes, omega, zeta, times, amplitudes,
                                          sampled_model.capacity, s->scratch);
     if (count < 0)
-        return fmi2_fail(inst, "%s: kind %s with n = %d for n_modes = %d has more impulses than the %d this FMU "
+        return model_fail(inst, "%s: kind %s with n = %d for n_modes = %d has more impulses than the %d this FMU "
                          "holds; rebuild it with shapefmu build shaper --native for that design", function, kind, n,
                          n_modes, sampled_model.capacity);
     for (int i = count; i < sampled_model.capacity; i++) times[i] = amplitudes[i] = 0.0; /* unused entries */
     s->design_changed = 0;
-    fmi2_debug(inst, "%s: %s re-designed in C for %d modes: %d impulses", function, kind, n_modes, count);
-    return fmi2OK;
+    model_debug(inst, "%s: %s re-designed in C for %d modes: %d impulses", function, kind, n_modes, count);
+    return MODEL_OK;
 }
 
-fmi2Status model_exit_initialization(Fmi2Instance *inst) {
-    static const char *const function = "fmi2ExitInitializationMode";
+static ModelStatus update(ModelInstance *inst, const char *function);
+
+static ModelStatus exit_initialization(ModelInstance *inst, const char *function) {
     Sampled *s = sampled_of(inst);
-    if (sampled_model.closed_form && s->design_changed && design(inst, function) != fmi2OK) return fmi2Error;
+    if (sampled_model.closed_form && s->design_changed && design(inst, function) != MODEL_OK) return MODEL_ERROR;
     const double longest = longest_delay(inst), ts = period(inst);
     if (longest > MAX_DELAY_SAMPLES)
-        return fmi2_fail(inst, "%s: the design's longest delay spans %.0f samples of Ts = %g s; at most %ld (the "
+        return model_fail(inst, "%s: the design's longest delay spans %.0f samples of Ts = %g s; at most %ld (the "
                          "delay line): use a longer Ts", function, longest, ts, MAX_DELAY_SAMPLES);
     if (allocate_line(inst, longest < 1.0 ? 1 : (long)longest) != 0)
-        return fmi2_fail(inst, "%s: out of memory for a delay line of %.0f samples", function, longest);
+        return model_fail(inst, "%s: out of memory for a delay line of %.0f samples", function, longest);
     regrid(inst);
     fir_start(&s->fir, inst->reals[s->rest], ts);
     s->started = 1;
-    return model_update(inst, function);
+    return update(inst, function);
 }
 
-fmi2Status model_update(Fmi2Instance *inst, const char *function) {
+static ModelStatus update(ModelInstance *inst, const char *function) {
     (void)function;
     Sampled *s = sampled_of(inst);
     if (s->started) inst->reals[s->y] = fir_output(&s->fir, inst->reals[s->u]);
-    return fmi2OK;
+    return MODEL_OK;
 }
 
-fmi2Status model_do_step(Fmi2Instance *inst, double t, double h) {
+static ModelStatus do_step(ModelInstance *inst, double t, double h, const char *function) {
     Sampled *s = sampled_of(inst);
     const GridStep step = grid_step(&s->fir.at, s->fir.ts, t, h);
     if (step.count > (double)MAX_SAMPLES_PER_STEP)
-        return fmi2_fail(inst, "fmi2DoStep: communication step h = %g s spans %.0f samples of Ts = %g s; at most "
-                         "%lld per step", h, step.count, s->fir.ts, MAX_SAMPLES_PER_STEP);
+        return model_fail(inst, "%s: communication step h = %g s spans %.0f samples of Ts = %g s; at most "
+                         "%lld per step", function, h, step.count, s->fir.ts, MAX_SAMPLES_PER_STEP);
     fir_step(&s->fir, &step, inst->reals[s->u]);
-    return fmi2OK;
+    return MODEL_OK;
 }
 
 /* ---------------------------------------------------------------- values */
 
-static const SampledVariable *variable(size_t vr) { return &sampled_model.variables[vr]; }
+static const VariableRow *row(size_t vr) { return &sampled_model.variables.rows[vr]; }
 
 /* Refuses a value other than the build value; given is the value as the user wrote it. */
-static fmi2Status refuse_other_value(Fmi2Instance *inst, size_t vr, const char *given, const char *function) {
-    const SampledVariable *v = variable(vr);
+static ModelStatus refuse_other_value(ModelInstance *inst, size_t vr, const char *given, const char *function) {
+    const VariableRow *v = row(vr);
     char start[64];
     if (v->string_start != NULL) snprintf(start, sizeof start, "%s", v->string_start);
     else snprintf(start, sizeof start, "%.17g", v->start);
-    return fmi2_fail(inst, "%s: %s is %s in this native FMU, whose design is made at build time; got %s (rebuild it "
+    return model_fail(inst, "%s: %s is %s in this native FMU, whose design is made at build time; got %s (rebuild it "
                      "with shapefmu build ... --native for another value)", function, v->name, start, given);
 }
 
-static fmi2Status real_range(Fmi2Instance *inst, const char *name, double value, int ok, const char *range,
+static ModelStatus real_range(ModelInstance *inst, const char *name, double value, int ok, const char *range,
                              const char *function) {
-    if (ok && isfinite(value)) return fmi2OK;
-    return fmi2_fail(inst, "%s: %s must be %s, got %g", function, name, range, value);
+    if (ok && isfinite(value)) return MODEL_OK;
+    return model_fail(inst, "%s: %s must be %s, got %g", function, name, range, value);
 }
 
-static fmi2Status keeps_real(Fmi2Instance *inst, size_t vr, double value, int same, const char *function) {
-    if (same) return fmi2OK;
+static ModelStatus keeps_real(ModelInstance *inst, size_t vr, double value, int same, const char *function) {
+    if (same) return MODEL_OK;
     char given[32];
     snprintf(given, sizeof given, "%.17g", value);
     return refuse_other_value(inst, vr, given, function);
 }
 
-static fmi2Status keeps_integer(Fmi2Instance *inst, size_t vr, int value, int same, const char *function) {
-    if (same) return fmi2OK;
+static ModelStatus keeps_integer(ModelInstance *inst, size_t vr, int value, int same, const char *function) {
+    if (same) return MODEL_OK;
     char given[32];
     snprintf(given, sizeof given, "%d", value);
     return refuse_other_value(inst, vr, given, function);
 }
 
-fmi2Status model_check_real(Fmi2Instance *inst, size_t vr, double value, const char *function) {
-    if (vr == sampled_of(inst)->u && isfinite(value)) return fmi2OK; /* the input, every step: first */
-    const SampledVariable *v = variable(vr);
+static ModelStatus check_real(ModelInstance *inst, size_t vr, double value, const char *function) {
+    if (vr == sampled_of(inst)->u && isfinite(value)) return MODEL_OK; /* the input, every step: first */
+    const VariableRow *v = row(vr);
     switch (v->meaning) {
     case MEANS_PERIOD: return real_range(inst, v->name, value, value > 0.0, "> 0", function);
     case MEANS_IMPULSE_TIME: {
-        if (real_range(inst, v->name, value, value >= 0.0, ">= 0 (s)", function) != fmi2OK) return fmi2Error;
+        if (real_range(inst, v->name, value, value >= 0.0, ">= 0 (s)", function) != MODEL_OK) return MODEL_ERROR;
         const Sampled *s = sampled_of(inst);
         if (s->started && floor(value / period(inst)) + 1.0 > (double)s->fir.length)
-            return fmi2_fail(inst, "%s: %s = %g s lies beyond the delay line of %ld samples of Ts = %g s allocated at "
+            return model_fail(inst, "%s: %s = %g s lies beyond the delay line of %ld samples of Ts = %g s allocated at "
                              "initialisation", function, v->name, value, s->fir.length, period(inst));
-        return fmi2OK;
+        return MODEL_OK;
     }
     case MEANS_TAP:
-        if (v->index == 0 && !sampled_model.feedthrough && value != 0.0)
-            return fmi2_fail(inst, "%s: %s must stay 0, since this FMU declares y independent of u at the same "
+        if (element(v) == 0 && !sampled_model.feedthrough && value != 0.0)
+            return model_fail(inst, "%s: %s must stay 0, since this FMU declares y independent of u at the same "
                              "instant, got %g", function, v->name, value);
         return real_range(inst, v->name, value, 1, "finite", function);
     case MEANS_FREQUENCY:
-        if (real_range(inst, v->name, value, value > 0.0, "> 0", function) != fmi2OK) return fmi2Error;
+        if (real_range(inst, v->name, value, value > 0.0, "> 0", function) != MODEL_OK) return MODEL_ERROR;
         return keeps_real(inst, vr, value, sampled_model.closed_form || value == v->start, function);
     case MEANS_DAMPING:
-        if (real_range(inst, v->name, value, value >= 0.0 && value < 1.0, "in [0, 1)", function) != fmi2OK)
-            return fmi2Error;
+        if (real_range(inst, v->name, value, value >= 0.0 && value < 1.0, "in [0, 1)", function) != MODEL_OK)
+            return MODEL_ERROR;
         return keeps_real(inst, vr, value, sampled_model.closed_form || value == v->start, function);
     case MEANS_TOLERANCE:
-        if (real_range(inst, v->name, value, value > 0.0 && value < 1.0, "in (0, 1)", function) != fmi2OK)
-            return fmi2Error;
+        if (real_range(inst, v->name, value, value > 0.0 && value < 1.0, "in (0, 1)", function) != MODEL_OK)
+            return MODEL_ERROR;
         return keeps_real(inst, vr, value, sampled_model.closed_form || value == v->start, function);
     case MEANS_BUILD_VALUE: return keeps_real(inst, vr, value, value == v->start, function);
     default: return real_range(inst, v->name, value, 1, "finite", function);
     }
 }
 
-fmi2Status model_check_integer(Fmi2Instance *inst, size_t vr, int value, const char *function) {
-    const SampledVariable *v = variable(vr);
+static ModelStatus check_integer(ModelInstance *inst, size_t vr, int value, const char *function) {
+    const VariableRow *v = row(vr);
     switch (v->meaning) {
     case MEANS_ORDER:
-        if (value < 0 || value > 62) return fmi2_fail(inst, "%s: n must be an integer in [0, 62], got %d", function, value);
+        if (value < 0 || value > 62) return model_fail(inst, "%s: n must be an integer in [0, 62], got %d", function, value);
         return keeps_integer(inst, vr, value, sampled_model.closed_form || value == v->start, function);
     case MEANS_MODES:
         if (value < 1 || value > sampled_model.max_modes)
-            return fmi2_fail(inst, "%s: n_modes must be in [1, %d], got %d", function, sampled_model.max_modes, value);
+            return model_fail(inst, "%s: n_modes must be in [1, %d], got %d", function, sampled_model.max_modes, value);
         return keeps_integer(inst, vr, value, sampled_model.closed_form || value == v->start, function);
     default: return keeps_integer(inst, vr, value, value == (int)v->start, function);
     }
 }
 
-fmi2Status model_check_string(Fmi2Instance *inst, size_t vr, const char *value, const char *function) {
-    const SampledVariable *v = variable(vr);
+static ModelStatus check_string(ModelInstance *inst, size_t vr, const char *value, const char *function) {
+    const VariableRow *v = row(vr);
     const int same = strcmp(value, v->string_start) == 0;
     if (v->meaning == MEANS_KIND && sampled_model.closed_form && !same && closed_form_kind(value) == KIND_NOT_CLOSED_FORM)
-        return fmi2_fail(inst, "%s: kind must be a kind this FMU designs in C (zv, zvd, zvdd, zv_dn, mzv), got %s; "
+        return model_fail(inst, "%s: kind must be a kind this FMU designs in C (zv, zvd, zvdd, zv_dn, mzv), got %s; "
                          "other kinds are designed at build time: shapefmu build shaper --native --kind %s", function,
                          value, value);
-    if (same || (v->meaning == MEANS_KIND && sampled_model.closed_form)) return fmi2OK;
+    if (same || (v->meaning == MEANS_KIND && sampled_model.closed_form)) return MODEL_OK;
     return refuse_other_value(inst, vr, value, function);
 }
 
-void model_changed(Fmi2Instance *inst, size_t vr) {
+static void changed(ModelInstance *inst, size_t vr) {
     Sampled *s = sampled_of(inst);
-    if (vr == s->u) return; /* y follows u in model_update */
-    switch (variable(vr)->meaning) {
+    if (vr == s->u) return; /* y follows u in update */
+    switch (row(vr)->meaning) {
     case MEANS_KIND: case MEANS_ORDER: case MEANS_MODES: case MEANS_FREQUENCY: case MEANS_DAMPING:
         s->design_changed = 1;
         break;
@@ -291,30 +283,25 @@ void model_changed(Fmi2Instance *inst, size_t vr) {
     }
 }
 
-void model_states_changed(Fmi2Instance *inst) { (void)inst; }
 
-fmi2Status model_partial_derivative(Fmi2Instance *inst, size_t unknown, size_t known, double *entry,
-                                    const char *function) {
-    (void)unknown; (void)known; (void)entry;
-    return fmi2_fail(inst, "%s: this FMU provides no directional derivatives", function);
-}
 
 /* ---------------------------------------------------------------- state */
 
 /* started, design_changed, then the FIR's state when started. */
-size_t model_state_size(const Fmi2Instance *inst) {
+static size_t state_size(const ModelInstance *inst) {
     const Sampled *s = (const Sampled *)inst->model;
     return 2 * sizeof(long long) + (s->started ? fir_state_size(&s->fir) : 0);
 }
 
-void model_save_state(const Fmi2Instance *inst, unsigned char *bytes) {
+static void save_state(const ModelInstance *inst, unsigned char *bytes) {
     const Sampled *s = (const Sampled *)inst->model;
     const long long flags[2] = {s->started, s->design_changed};
     memcpy(bytes, flags, sizeof flags);
     if (s->started) fir_save(&s->fir, bytes + sizeof flags);
 }
 
-int model_restore_state(Fmi2Instance *inst, const unsigned char *bytes, size_t size) {
+static int restore_state(ModelInstance *inst, const unsigned char *bytes, size_t size, const char *function) {
+    (void)function;
     Sampled *s = sampled_of(inst);
     long long flags[2];
     if (size < sizeof flags) return -1;
@@ -340,53 +327,50 @@ int model_restore_state(Fmi2Instance *inst, const unsigned char *bytes, size_t s
 
 static size_t first_of(SampledMeaning meaning) {
     for (size_t vr = 0; vr < n_variables(); vr++)
-        if (variable(vr)->meaning == meaning) return vr;
+        if (row(vr)->meaning == (int)meaning) return vr;
     return (size_t)-1;
 }
 
-void model_reset(Fmi2Instance *inst) {
+static void reset(ModelInstance *inst) {
     Sampled *s = sampled_of(inst);
-    const size_t n_real = sampled_model.n_real, n_integer = sampled_model.n_integer;
-    for (size_t vr = 0; vr < n_variables(); vr++) {
-        const SampledVariable *v = variable(vr);
-        if (vr < n_real) inst->reals[vr] = v->start;
-        else if (vr < n_real + n_integer) inst->integers[vr - n_real] = (int)v->start;
-        else if (vr < n_real + n_integer + sampled_model.n_boolean) inst->booleans[vr - n_real - n_integer] = v->start != 0.0;
-        else snprintf(fmi2_string(inst, vr), fmi2_string_capacity(inst) + 1, "%s", v->string_start);
-    }
     s->started = 0;
     s->design_changed = 0;
 }
 
-void model_free(Fmi2Instance *inst) {
+static void free_model(ModelInstance *inst) {
     Sampled *s = sampled_of(inst);
     if (s == NULL) return;
     free_line(inst);
-    fmi2_release(inst, s->scratch);
-    fmi2_release(inst, s);
+    model_release(inst, s->scratch);
+    model_release(inst, s);
     inst->model = NULL;
 }
 
-int model_instantiate(Fmi2Instance *inst) {
-    Sampled *s = fmi2_allocate(inst, 1, sizeof(Sampled));
+static int instantiate(ModelInstance *inst) {
+    Sampled *s = model_allocate(inst, 1, sizeof(Sampled));
     if (s == NULL) return -1;
     memset(s, 0, sizeof *s);
     inst->model = s;
-    s->n_variables = n_variables();
     s->u = first_of(MEANS_INPUT), s->y = first_of(MEANS_OUTPUT), s->rest = first_of(MEANS_REST);
     s->period = first_of(MEANS_PERIOD), s->kind = first_of(MEANS_KIND), s->order = first_of(MEANS_ORDER);
     s->modes = first_of(MEANS_MODES), s->time = first_of(MEANS_IMPULSE_TIME);
     s->amplitude = first_of(MEANS_IMPULSE_AMPLITUDE), s->tap = first_of(MEANS_TAP);
     for (size_t vr = 0; vr < n_variables(); vr++) {
-        const SampledVariable *v = variable(vr);
-        if (v->index >= MAX_MODES) continue;
-        if (v->meaning == MEANS_FREQUENCY) s->frequency[v->index] = vr;
-        if (v->meaning == MEANS_DAMPING) s->damping[v->index] = vr;
+        const VariableRow *v = row(vr);
+        if (element(v) >= MAX_MODES) continue;
+        if (v->meaning == MEANS_FREQUENCY) s->frequency[element(v)] = vr;
+        if (v->meaning == MEANS_DAMPING) s->damping[element(v)] = vr;
     }
     if (sampled_model.closed_form) {
-        s->scratch = fmi2_allocate(inst, 2 * (size_t)sampled_model.capacity, sizeof(double));
+        s->scratch = model_allocate(inst, 2 * (size_t)sampled_model.capacity, sizeof(double));
         if (s->scratch == NULL) return -1;
     }
-    model_reset(inst);
     return 0;
 }
+
+const ModelPart model_part = {
+    .variables = &sampled_model.variables, .instantiate = instantiate, .free = free_model, .reset = reset,
+    .check_real = check_real, .check_integer = check_integer, .check_string = check_string, .changed = changed,
+    .update = update, .exit_initialization = exit_initialization, .do_step = do_step,
+    .state_size = state_size, .save_state = save_state, .restore_state = restore_state,
+};

@@ -1,4 +1,4 @@
-/* The native EKF tuner (paper 001, Fig. 20) behind the generic FMI 2.0 layer: the C twin of the
+/* The native EKF tuner (paper 001, Fig. 20) behind the generic FMI layers: the C twin of the
  * pythonfmu EKFTuner, runtime/ekf.py's ResonanceEKF and runtime/ekf_tuner.py's
  * EKFTunedShaperKernel, operation for operation, so that both give the same numbers.
  *
@@ -7,7 +7,7 @@
  * has converged designs a closed-form shaper (shaper_designs.c) for it, switched in when the
  * command has rested for as long as both shapers remember; the command passes through until then.
  * Every parameter is used at the exit of initialisation and every formula is closed-form, so all
- * of them may change before it, as in the pythonfmu FMU. Outputs change only in fmi2DoStep (no
+ * of them may change before it, as in the pythonfmu FMU. Outputs change only in a step (no
  * feed-through).
  */
 #include <math.h>
@@ -47,19 +47,19 @@ typedef struct {
     const char *failure;     /* set by a sample that could not be taken */
     double times[MAX_IMPULSES], amplitudes[MAX_IMPULSES], scratch[2 * MAX_IMPULSES];
     size_t vr[EKF_MEANINGS];
-    Fmi2Instance *inst;
+    ModelInstance *inst;
 } Tuner;
 
-static Tuner *tuner_of(const Fmi2Instance *inst) { return (Tuner *)inst->model; }
+static Tuner *tuner_of(const ModelInstance *inst) { return (Tuner *)inst->model; }
 
 
-static double real_of(const Fmi2Instance *inst, EkfMeaning meaning) { return inst->reals[tuner_of(inst)->vr[meaning]]; }
+static double real_of(const ModelInstance *inst, EkfMeaning meaning) { return inst->reals[tuner_of(inst)->vr[meaning]]; }
 
 /* ---------------------------------------------------------------- the shaper (runtime/shaper_filter.py) */
 
-static void streaming_free(Fmi2Instance *inst, Streaming *f) {
-    fmi2_release(inst, f->taps);
-    fmi2_release(inst, f->line);
+static void streaming_free(ModelInstance *inst, Streaming *f) {
+    model_release(inst, f->taps);
+    model_release(inst, f->line);
     memset(f, 0, sizeof *f);
 }
 
@@ -77,7 +77,7 @@ static int streaming_design(Tuner *t, Streaming *f, int count) {
         if ((long)x > longest) longest = (long)x;
     }
     streaming_free(t->inst, f);
-    f->taps = fmi2_allocate(t->inst, (size_t)longest, sizeof(double));
+    f->taps = model_allocate(t->inst, (size_t)longest, sizeof(double));
     if (f->taps == NULL) {
         t->failure = "out of memory for the shaper's taps";
         return -1;
@@ -92,7 +92,7 @@ static int streaming_design(Tuner *t, Streaming *f, int count) {
     long length = longest;
     while (length > 1 && f->taps[length - 1] == 0.0) length--;
     f->length = length;
-    f->line = fmi2_allocate(t->inst, 2 * (size_t)length, sizeof(double));
+    f->line = model_allocate(t->inst, 2 * (size_t)length, sizeof(double));
     if (f->line == NULL) {
         t->failure = "out of memory for the shaper's delay line";
         return -1;
@@ -167,7 +167,7 @@ static void commit(void *context, const double *inputs) {
     t->inst->reals[t->vr[EKF_OUTPUT]] = shape(t, inputs[0]);
 }
 
-static void publish_estimates(Fmi2Instance *inst) {
+static void publish_estimates(ModelInstance *inst) {
     const Tuner *t = tuner_of(inst);
     const double natural = ekf_omega_n(&t->ekf);
     inst->reals[t->vr[EKF_OMEGA_EST]] = natural;
@@ -175,111 +175,93 @@ static void publish_estimates(Fmi2Instance *inst) {
     inst->reals[t->vr[EKF_CONVERGED]] = t->ekf.converged ? 1.0 : 0.0;
 }
 
-/* ---------------------------------------------------------------- FMI hooks: life cycle */
+/* ---------------------------------------------------------------- the part's hooks: life cycle */
 
-void model_describe(Fmi2ModelInfo *info) {
-    memset(info, 0, sizeof *info);
-    twin_describe(&ekf_tuner_model, info);
-}
-
-Fmi2Role model_variable(const Fmi2Instance *inst, Fmi2Type type, size_t vr, const char **name) {
-    (void)inst, (void)type;
-    return twin_variable(&ekf_tuner_model, vr, name);
-}
-
-static void release_run(Fmi2Instance *inst) {
+static void release_run(ModelInstance *inst) {
     Tuner *t = tuner_of(inst);
     streaming_free(inst, &t->active);
     streaming_free(inst, &t->pending);
-    fmi2_release(inst, t->history.recent);
-    fmi2_release(inst, t->history.queued);
+    model_release(inst, t->history.recent);
+    model_release(inst, t->history.queued);
     t->history.recent = NULL;
     t->history.queued = NULL;
     t->started = t->has_active = t->has_pending = t->has_design = t->has_last = 0;
 }
 
-void model_reset(Fmi2Instance *inst) {
-    twin_reset(&ekf_tuner_model, inst);
+static void reset(ModelInstance *inst) {
     release_run(inst);
     tuner_of(inst)->failure = NULL;
 }
 
-int model_instantiate(Fmi2Instance *inst) {
-    Tuner *t = fmi2_allocate(inst, 1, sizeof(Tuner));
+static int instantiate(ModelInstance *inst) {
+    Tuner *t = model_allocate(inst, 1, sizeof(Tuner));
     if (t == NULL) return -1;
     memset(t, 0, sizeof *t);
     inst->model = t;
     t->inst = inst;
     twin_index(&ekf_tuner_model, t->vr, EKF_MEANINGS);
-    model_reset(inst);
     return 0;
 }
 
-void model_free(Fmi2Instance *inst) {
+static void free_model(ModelInstance *inst) {
     Tuner *t = tuner_of(inst);
     if (t == NULL) return;
     release_run(inst);
-    fmi2_release(inst, t);
+    model_release(inst, t);
     inst->model = NULL;
 }
 
-fmi2Status model_exit_initialization(Fmi2Instance *inst) {
-    static const char *const function = "fmi2ExitInitializationMode";
+static ModelStatus exit_initialization(ModelInstance *inst, const char *function) {
     Tuner *t = tuner_of(inst);
     const double ts = real_of(inst, EKF_PERIOD), omega0 = real_of(inst, EKF_OMEGA0);
     const double fs = 1.0 / ts;
     if (!(omega0 < PI * fs))
-        return fmi2_fail(inst, "%s: omega0 must be in (0, pi/Ts) = (0, %g) rad/s, got %g", function, PI * fs, omega0);
+        return model_fail(inst, "%s: omega0 must be in (0, pi/Ts) = (0, %g) rad/s, got %g", function, PI * fs, omega0);
     const double window = nearbyint(2.0 * PI * fs / omega0);  /* Python's round: half to even */
     if (!(window <= (double)EKF_MAX_WINDOW))
-        return fmi2_fail(inst, "%s: one period of omega0 = %g rad/s spans %.0f samples of Ts = %g s, the EKF's "
+        return model_fail(inst, "%s: one period of omega0 = %g rad/s spans %.0f samples of Ts = %g s, the EKF's "
                          "convergence window; at most %ld: raise Ts or omega0", function, omega0, window, ts, EKF_MAX_WINDOW);
     release_run(inst);
-    t->kind = closed_form_kind(fmi2_string(inst, t->vr[EKF_KIND]));
+    t->kind = closed_form_kind(model_string(inst, t->vr[EKF_KIND]));
     t->order = inst->integers[t->vr[EKF_ORDER] - ekf_tuner_model.n_real];
     t->retune = real_of(inst, EKF_RETUNE);
     ekf_start(&t->ekf, fs, omega0, real_of(inst, EKF_AMPLITUDE), window < 2.0 ? 2 : (long long)window);
     t->h = 1.0 / t->ekf.fs;
-    t->history.recent = fmi2_allocate(inst, 2 * (size_t)t->ekf.window, sizeof(double));
-    t->history.queued = fmi2_allocate(inst, EKF_QUEUES * (size_t)t->ekf.window, sizeof(long long));
+    t->history.recent = model_allocate(inst, 2 * (size_t)t->ekf.window, sizeof(double));
+    t->history.queued = model_allocate(inst, EKF_QUEUES * (size_t)t->ekf.window, sizeof(long long));
     if (t->history.recent == NULL || t->history.queued == NULL)
-        return fmi2_fail(inst, "%s: out of memory for a window of %lld samples", function, t->ekf.window);
+        return model_fail(inst, "%s: out of memory for a window of %lld samples", function, t->ekf.window);
     clock_start(&t->clock, ts);
     t->failure = NULL;
     t->started = 1;
     inst->reals[t->vr[EKF_OUTPUT]] = 0.0;
     publish_estimates(inst);
-    return fmi2OK;
+    return MODEL_OK;
 }
 
-fmi2Status model_update(Fmi2Instance *inst, const char *function) {
-    (void)inst, (void)function;
-    return fmi2OK; /* outputs change only in fmi2DoStep */
-}
-
-fmi2Status model_do_step(Fmi2Instance *inst, double t_now, double h) {
+static ModelStatus do_step(ModelInstance *inst, double t_now, double h, const char *function) {
     Tuner *t = tuner_of(inst);
     const GridStep step = grid_step(&t->clock.at, t->clock.ts, t_now, h);
     if (step.count > (double)MAX_SAMPLES_PER_STEP)
-        return fmi2_fail(inst, "fmi2DoStep: communication step h = %g s spans %.0f samples of Ts = %g s; at most %lld "
-                         "per step", h, step.count, t->clock.ts, MAX_SAMPLES_PER_STEP);
+        return model_fail(inst, "%s: communication step h = %g s spans %.0f samples of Ts = %g s; at most %lld "
+                         "per step", function, h, step.count, t->clock.ts, MAX_SAMPLES_PER_STEP);
     const double inputs[2] = {real_of(inst, EKF_COMMAND), real_of(inst, EKF_VIBRATION)};
     clock_take(&t->clock, &step, inputs, 2, commit, t);
-    if (t->failure != NULL) return fmi2_fail(inst, "fmi2DoStep: at t = %g s: %s", t_now, t->failure);
+    if (t->failure != NULL) return model_fail(inst, "%s: at t = %g s: %s", function, t_now, t->failure);
     publish_estimates(inst);
-    return fmi2OK;
+    return MODEL_OK;
 }
 
-/* ---------------------------------------------------------------- FMI hooks: values */
+/* ---------------------------------------------------------------- the part's hooks: values */
 
-static fmi2Status range(Fmi2Instance *inst, const char *name, double value, int ok, const char *valid,
+static ModelStatus range(ModelInstance *inst, const char *name, double value, int ok, const char *valid,
                         const char *function) {
-    if (ok && isfinite(value)) return fmi2OK;
-    return fmi2_fail(inst, "%s: %s must be %s, got %g", function, name, valid, value);
+    if (ok && isfinite(value)) return MODEL_OK;
+    return model_fail(inst, "%s: %s must be %s, got %g", function, name, valid, value);
 }
 
-fmi2Status model_check_real(Fmi2Instance *inst, size_t vr, double value, const char *function) {
-    const TwinVariable *v = &ekf_tuner_model.variables[vr];
+static ModelStatus check_real(ModelInstance *inst, size_t vr, double value, const char *function) {
+    const VariableRow *v = &ekf_tuner_model.rows[vr];
     switch (v->meaning) {
     case EKF_PERIOD: case EKF_OMEGA0: case EKF_AMPLITUDE: case EKF_RETUNE:
         return range(inst, v->name, value, value > 0.0, "> 0", function);
@@ -287,30 +269,21 @@ fmi2Status model_check_real(Fmi2Instance *inst, size_t vr, double value, const c
     }
 }
 
-fmi2Status model_check_integer(Fmi2Instance *inst, size_t vr, int value, const char *function) {
-    const TwinVariable *v = &ekf_tuner_model.variables[vr];
+static ModelStatus check_integer(ModelInstance *inst, size_t vr, int value, const char *function) {
+    const VariableRow *v = &ekf_tuner_model.rows[vr];
     if (v->meaning == EKF_ORDER && (value < 0 || value > MAX_ORDER))
-        return fmi2_fail(inst, "%s: %s must be an integer in [0, %d], got %d", function, v->name, MAX_ORDER, value);
-    return fmi2OK;
+        return model_fail(inst, "%s: %s must be an integer in [0, %d], got %d", function, v->name, MAX_ORDER, value);
+    return MODEL_OK;
 }
 
-fmi2Status model_check_string(Fmi2Instance *inst, size_t vr, const char *value, const char *function) {
-    const TwinVariable *v = &ekf_tuner_model.variables[vr];
+static ModelStatus check_string(ModelInstance *inst, size_t vr, const char *value, const char *function) {
+    const VariableRow *v = &ekf_tuner_model.rows[vr];
     if (v->meaning == EKF_KIND && closed_form_kind(value) == KIND_NOT_CLOSED_FORM)
-        return fmi2_fail(inst, "%s: %s must be one of zv, zvd, zvdd, zv_dn, mzv, got %s", function, v->name, value);
-    return fmi2OK;
+        return model_fail(inst, "%s: %s must be one of zv, zvd, zvdd, zv_dn, mzv, got %s", function, v->name, value);
+    return MODEL_OK;
 }
 
-void model_changed(Fmi2Instance *inst, size_t vr) { (void)inst, (void)vr; }
-void model_states_changed(Fmi2Instance *inst) { (void)inst; }
-
-fmi2Status model_partial_derivative(Fmi2Instance *inst, size_t unknown, size_t known, double *entry,
-                                    const char *function) {
-    (void)unknown, (void)known, (void)entry;
-    return fmi2_fail(inst, "%s: this FMU provides no directional derivatives", function);
-}
-
-/* ---------------------------------------------------------------- FMI hooks: state
+/* ---------------------------------------------------------------- the part's hooks: state
  * Bytes: the Tuner's scalars, the EKF and the clock (a fixed header), then the window's history
  * and each filter's taps and delay line, whose lengths are in the header. */
 
@@ -327,7 +300,7 @@ typedef struct {
 
 static size_t streaming_bytes(const Streaming *f) { return (size_t)f->length * 3 * sizeof(double); }
 
-size_t model_state_size(const Fmi2Instance *inst) {
+static size_t state_size(const ModelInstance *inst) {
     const Tuner *t = tuner_of(inst);
     if (!t->started) return sizeof(StateHeader);
     return sizeof(StateHeader) + 2 * (size_t)t->ekf.window * sizeof(double) + streaming_bytes(&t->active)
@@ -340,7 +313,7 @@ static unsigned char *put_streaming(const Streaming *f, unsigned char *at) {
     return at + streaming_bytes(f);
 }
 
-void model_save_state(const Fmi2Instance *inst, unsigned char *bytes) {
+static void save_state(const ModelInstance *inst, unsigned char *bytes) {
     const Tuner *t = tuner_of(inst);
     StateHeader header;
     memset(&header, 0, sizeof header);
@@ -367,8 +340,8 @@ static int take_streaming(Tuner *t, Streaming *f, long long length, long long po
     if (length == 0) return pos == 0 ? 0 : -1;
     if (length < 0 || length > MAX_LENGTH || pos < 0 || pos >= length || (size_t)(end - *at) < (size_t)length * 3 * sizeof(double))
         return -1;
-    f->taps = fmi2_allocate(t->inst, (size_t)length, sizeof(double));
-    f->line = fmi2_allocate(t->inst, 2 * (size_t)length, sizeof(double));
+    f->taps = model_allocate(t->inst, (size_t)length, sizeof(double));
+    f->line = model_allocate(t->inst, 2 * (size_t)length, sizeof(double));
     if (f->taps == NULL || f->line == NULL) return -1;
     f->length = length, f->pos = pos;
     memcpy(f->taps, *at, (size_t)length * sizeof(double));
@@ -377,7 +350,8 @@ static int take_streaming(Tuner *t, Streaming *f, long long length, long long po
     return 0;
 }
 
-int model_restore_state(Fmi2Instance *inst, const unsigned char *bytes, size_t size) {
+static int restore_state(ModelInstance *inst, const unsigned char *bytes, size_t size, const char *function) {
+    (void)function;
     Tuner *t = tuner_of(inst);
     StateHeader header;
     if (size < sizeof header) return -1;
@@ -395,8 +369,8 @@ int model_restore_state(Fmi2Instance *inst, const unsigned char *bytes, size_t s
         return -1;
     const unsigned char *at = bytes + sizeof header, *end = bytes + size;
     if ((size_t)(end - at) < 2 * (size_t)window * sizeof(double)) return -1;
-    t->history.recent = fmi2_allocate(inst, 2 * (size_t)window, sizeof(double));
-    t->history.queued = fmi2_allocate(inst, EKF_QUEUES * (size_t)window, sizeof(long long));
+    t->history.recent = model_allocate(inst, 2 * (size_t)window, sizeof(double));
+    t->history.queued = model_allocate(inst, EKF_QUEUES * (size_t)window, sizeof(long long));
     if (t->history.recent == NULL || t->history.queued == NULL) {
         release_run(inst);
         return -1;
@@ -420,3 +394,10 @@ int model_restore_state(Fmi2Instance *inst, const unsigned char *bytes, size_t s
     t->started = 1;
     return 0;
 }
+
+const ModelPart model_part = {
+    .variables = &ekf_tuner_model, .instantiate = instantiate, .free = free_model, .reset = reset,
+    .check_real = check_real, .check_integer = check_integer, .check_string = check_string,
+    .exit_initialization = exit_initialization, .do_step = do_step,
+    .state_size = state_size, .save_state = save_state, .restore_state = restore_state,
+};

@@ -26,11 +26,12 @@ acceleration jumps from 0 to its first level: ModelStructure declares that accel
 ``start``; position and velocity start at 0 and do not.
 """
 
-from ....runtime import shaped_bang_bang, shaper_designs, time_frequency, twin_pulse
-from ....runtime.checks import check_finite, check_positive
-from ....runtime.motion import PiecewiseAcceleration
-from ....runtime.sample_clock import StepTime
-from ..slave_base import Fmi2Slave
+from ...runtime import shaped_bang_bang, shaper_designs, time_frequency, twin_pulse
+from ...runtime.checks import check_finite, check_positive
+from ...runtime.motion import PiecewiseAcceleration
+from ...runtime.sample_clock import StepTime
+from .interface import Interface, input_, mode_parameters, output, parameter
+from .model import Model as _Model
 
 PROFILES = (*twin_pulse.KINDS, "time-frequency", "bang-bang")
 SHAPERS = ("none", *shaper_designs.KINDS)
@@ -70,41 +71,44 @@ def design_motion(values):
     raise ValueError(f"profile must be one of {', '.join(PROFILES)}, got {profile!r}")
 
 
-class ProfileGenerator(Fmi2Slave):
-    model_name = "ProfileGenerator"
-    description = "Rest-to-rest motion profiles: twin-pulse family, time-frequency, shaped bang-bang"
+INTERFACE = Interface(
+    "ProfileGenerator",
+    "Rest-to-rest motion profiles: twin-pulse family, time-frequency, shaped bang-bang",
+    (
+        parameter("profile", "BC:TZ", f"profile family: {', '.join(PROFILES)}"),
+        parameter("distance", 1.7, "move distance", unit="m"),
+        parameter("speed", 0.7, "slew speed (twin-pulse); speed limit of the bang-bang, 0 for none", unit="m/s",
+                  minimum=0.0),
+        parameter("acceleration_limit", 1.0, "acceleration limit of the bang-bang", unit="m/s2"),
+        parameter("omega_n", 3.5, "notch frequency (twin-pulse) or first resonance (time-frequency)", unit="rad/s"),
+        parameter("delta_omega", 0.2, "null mis-alignment of the M- twin-pulse kinds (if attenuation is 0)", unit="rad/s"),
+        parameter("attenuation", 0.05, "magnitude at omega_n the M- kinds are designed for; 0 uses delta_omega",
+                  minimum=0.0),
+        parameter("null", 2, "null index k of the TP:BC twin pulse (eq. 3)", minimum=1),
+        parameter("Ts", 1e-3, "sampling period of the profile's kernel (time-frequency: of the profile)", unit="s"),
+        parameter("move_time", 2.5e-3, "time-frequency move time, a whole number of Ts", unit="s"),
+        parameter("optimise_scale", True, "time-frequency: choose the scale n by eq. (20)"),
+        parameter("scale", 11.0, "time-frequency scale n when optimise_scale is false"),
+        parameter("shaper", "none", f"shaper convolved with the bang-bang: {', '.join(SHAPERS)}"),
+        parameter("n", 1, "derivative order of the zv_dn shaper", minimum=0),
+        parameter("n_modes", 1, f"number of modes of the bang-bang's shaper, 1..{MAX_MODES}", minimum=1, maximum=MAX_MODES),
+        *mode_parameters(MAX_MODES, "omega", "rad/s", lambda i: 10.0 * i, mode="shaper mode"),
+        parameter("t_start", 0.0, "start time of the move; negative: wait for the start input", unit="s"),
+        input_("start", 0.0, "starts the move at the communication point where it is >= 0.5"),
+        output("position", "position of the move", unit="m"),
+        output("velocity", "velocity of the move", unit="m/s"),
+        output("acceleration", "acceleration of the move (right-continuous)", unit="m/s2"),
+    ),
+    command_in=None,
+    command_out="position",
+)
+
+
+class Model(_Model):
+    interface = INTERFACE
     kernels = (PiecewiseAcceleration, StepTime)
     # started_at and the time the outputs are read at are times since t0, the start time
     state_attributes = ("motion", "started_at", "t0", "elapsed")
-
-    def declare(self):
-        self.parameter("profile", "BC:TZ", f"profile family: {', '.join(PROFILES)}")
-        self.parameter("distance", 1.7, "move distance", unit="m")
-        self.parameter("speed", 0.7, "slew speed (twin-pulse); speed limit of the bang-bang, 0 for none", unit="m/s")
-        self.parameter("acceleration_limit", 1.0, "acceleration limit of the bang-bang", unit="m/s2")
-        self.parameter("omega_n", 3.5, "notch frequency (twin-pulse) or first resonance (time-frequency)", unit="rad/s")
-        self.parameter("delta_omega", 0.2, "null mis-alignment of the M- twin-pulse kinds (if attenuation is 0)", unit="rad/s")
-        self.parameter("attenuation", 0.05, "magnitude at omega_n the M- kinds are designed for; 0 uses delta_omega")
-        self.parameter("null", 2, "null index k of the TP:BC twin pulse (eq. 3)", minimum=1)
-        self.parameter("Ts", 1e-3, "sampling period of the profile's kernel (time-frequency: of the profile)", unit="s")
-        self.parameter("move_time", 2.5e-3, "time-frequency move time, a whole number of Ts", unit="s")
-        self.parameter("optimise_scale", True, "time-frequency: choose the scale n by eq. (20)")
-        self.parameter("scale", 11.0, "time-frequency scale n when optimise_scale is false")
-        self.parameter("shaper", "none", f"shaper convolved with the bang-bang: {', '.join(SHAPERS)}")
-        self.parameter("n", 1, "derivative order of the zv_dn shaper", minimum=0)
-        self.parameter("n_modes", 1, f"number of modes of the bang-bang's shaper, 1..{MAX_MODES}", minimum=1, maximum=MAX_MODES)
-        for i in range(1, MAX_MODES + 1):
-            self.parameter(f"omega[{i}]", 10.0 * i, f"natural frequency of shaper mode {i}", unit="rad/s")
-            self.parameter(f"zeta[{i}]", 0.0, f"damping ratio of shaper mode {i}, in [0, 1)")
-        self.parameter("t_start", 0.0, "start time of the move; negative: wait for the start input", unit="s")
-        self.input("start", 0.0, "starts the move at the communication point where it is >= 0.5")
-        self.output("position", "position of the move", unit="m")
-        self.output("velocity", "velocity of the move", unit="m/s")
-        self.output("acceleration", "acceleration of the move (right-continuous)", unit="m/s2")
-        self.motion = None
-        self.started_at = None
-        self.t0 = 0.0
-        self.elapsed = None
 
     def initialize(self):
         if self.values["shaper"] not in SHAPERS:
@@ -143,8 +147,13 @@ class ProfileGenerator(Fmi2Slave):
         stop = start + 1.2 * max(self.motion.breaks[-1], 1e-9)
         return 0.0, stop, stop / 1000.0
 
+    def picture(self):
+        """The position over the move."""
+        end = self.motion.breaks[-1]
+        return [("line", [(end * k / 64, self.motion.state(end * k / 64)[0]) for k in range(65)])]
+
     def input_changed(self, name):
-        if self.phase == "step" and self.started_at is None and self.values["start"] >= 0.5:
+        if self.running and self.started_at is None and self.values["start"] >= 0.5:
             self.started_at = self.elapsed.value()
             self._update(self.started_at)
 

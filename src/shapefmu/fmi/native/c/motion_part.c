@@ -1,4 +1,4 @@
-/* The native profile generator behind the generic FMI 2.0 layer: the C twin of the pythonfmu
+/* The native profile generator behind the generic FMI layers: the C twin of the pythonfmu
  * ProfileGenerator, runtime/motion.py's PiecewiseAcceleration.state operation for operation.
  *
  * A twin-pulse or time-frequency move is designed at build time (motion_model.h), so its design
@@ -33,7 +33,7 @@ typedef struct {
     size_t vr[MOTION_MEANINGS];
 } Generator;
 
-static Generator *generator_of(const Fmi2Instance *inst) { return (Generator *)inst->model; }
+static Generator *generator_of(const ModelInstance *inst) { return (Generator *)inst->model; }
 
 
 /* (position, velocity, acceleration) at t; the acceleration is right-continuous. */
@@ -62,7 +62,7 @@ static void state_at(const MotionPath *path, double t, double *out) {
     out[0] = path->position[k] + v * s + 0.5 * a * s * s, out[1] = v + a * s, out[2] = a;
 }
 
-static void update(Fmi2Instance *inst, double elapsed) {
+static void update(ModelInstance *inst, double elapsed) {
     const Generator *g = generator_of(inst);
     double out[3] = {0.0, 0.0, 0.0};
     if (g->has_start) state_at(&g->path, elapsed - g->started_at, out);
@@ -72,12 +72,12 @@ static void update(Fmi2Instance *inst, double elapsed) {
 }
 
 /* Whether the move's t_start (an absolute time; negative: none) has come elapsed after t0. */
-static int scheduled(const Fmi2Instance *inst, double elapsed) {
+static int scheduled(const ModelInstance *inst, double elapsed) {
     const double t_start = inst->reals[generator_of(inst)->vr[MOTION_T_START]];
     return 0.0 <= t_start && t_start - inst->start_time <= elapsed;
 }
 
-static void maybe_start(Fmi2Instance *inst, double elapsed) {
+static void maybe_start(ModelInstance *inst, double elapsed) {
     Generator *g = generator_of(inst);
     if (g->has_start) return;
     if (inst->reals[g->vr[MOTION_START]] >= 0.5) g->has_start = 1, g->started_at = elapsed;
@@ -87,25 +87,16 @@ static void maybe_start(Fmi2Instance *inst, double elapsed) {
 
 /* ---------------------------------------------------------------- life cycle */
 
-void model_describe(Fmi2ModelInfo *info) {
-    memset(info, 0, sizeof *info);
-    twin_describe(&motion_variables, info);
-}
 
-Fmi2Role model_variable(const Fmi2Instance *inst, Fmi2Type type, size_t vr, const char **name) {
-    (void)inst, (void)type;
-    return twin_variable(&motion_variables, vr, name);
-}
 
-static void release_path(Fmi2Instance *inst) {
+static void release_path(ModelInstance *inst) {
     Generator *g = generator_of(inst);
-    fmi2_release(inst, g->storage);
+    model_release(inst, g->storage);
     g->storage = NULL;
     g->path = motion_path;
 }
 
-void model_reset(Fmi2Instance *inst) {
-    twin_reset(&motion_variables, inst);
+static void reset(ModelInstance *inst) {
     release_path(inst);
     Generator *g = generator_of(inst);
     g->started = g->has_start = 0;
@@ -113,40 +104,39 @@ void model_reset(Fmi2Instance *inst) {
     memset(&g->elapsed, 0, sizeof g->elapsed);
 }
 
-int model_instantiate(Fmi2Instance *inst) {
-    Generator *g = fmi2_allocate(inst, 1, sizeof(Generator));
+static int instantiate(ModelInstance *inst) {
+    Generator *g = model_allocate(inst, 1, sizeof(Generator));
     if (g == NULL) return -1;
     memset(g, 0, sizeof *g);
     inst->model = g;
     twin_index(&motion_variables, g->vr, MOTION_MEANINGS);
     g->path = motion_path;
-    model_reset(inst);
     return 0;
 }
 
-void model_free(Fmi2Instance *inst) {
+static void free_model(ModelInstance *inst) {
     if (inst->model == NULL) return;
     release_path(inst);
-    fmi2_release(inst, inst->model);
+    model_release(inst, inst->model);
     inst->model = NULL;
 }
 
-static double real_of(const Fmi2Instance *inst, int meaning) { return inst->reals[generator_of(inst)->vr[meaning]]; }
-static int integer_of(const Fmi2Instance *inst, int meaning) {
+static double real_of(const ModelInstance *inst, int meaning) { return inst->reals[generator_of(inst)->vr[meaning]]; }
+static int integer_of(const ModelInstance *inst, int meaning) {
     return inst->integers[generator_of(inst)->vr[meaning] - motion_variables.n_real];
 }
 
 /* A bang-bang build's move for the parameters now (shaped_bang_bang.py): its shaper re-designed
  * if closed-form (none: one impulse), else the build's impulses. */
-static fmi2Status design(Fmi2Instance *inst, const char *function) {
+static ModelStatus design(ModelInstance *inst, const char *function) {
     Generator *g = generator_of(inst);
     double omega[MOTION_MAX_MODES], zeta[MOTION_MAX_MODES];
     int count = motion_shaper.count;
     const double *times = motion_shaper.times, *amplitudes = motion_shaper.amplitudes;
-    double *work = fmi2_allocate(inst, 4 * MAX_IMPULSES + 2, sizeof(double)); /* impulses, and their design's scratch */
-    if (work == NULL) return fmi2_fail(inst, "%s: out of memory for the move's design", function);
+    double *work = model_allocate(inst, 4 * MAX_IMPULSES + 2, sizeof(double)); /* impulses, and their design's scratch */
+    if (work == NULL) return model_fail(inst, "%s: out of memory for the move's design", function);
     if (motion_shaper.closed_form) {
-        const char *shaper = fmi2_string(inst, g->vr[MOTION_SHAPER]);
+        const char *shaper = model_string(inst, g->vr[MOTION_SHAPER]);
         double *t = work, *a = work + MAX_IMPULSES;
         if (strcmp(shaper, "none") == 0) {
             t[0] = 0.0, a[0] = 1.0, count = 1;
@@ -156,45 +146,42 @@ static fmi2Status design(Fmi2Instance *inst, const char *function) {
             count = design_closed_form(closed_form_kind(shaper), integer_of(inst, MOTION_ORDER), n_modes, omega, zeta, t, a,
                                        MAX_IMPULSES, work + 2 * MAX_IMPULSES);
             if (count < 0) {
-                fmi2_release(inst, work);
-                return fmi2_fail(inst, "%s: shaper %s for %d modes has more than %d impulses", function, shaper, n_modes,
+                model_release(inst, work);
+                return model_fail(inst, "%s: shaper %s for %d modes has more than %d impulses", function, shaper, n_modes,
                                  MAX_IMPULSES);
             }
         }
         times = t, amplitudes = a;
     }
     release_path(inst);
-    g->storage = fmi2_allocate(inst, MOTION_DOUBLES(count), sizeof(double));
-    double *scratch = fmi2_allocate(inst, 4 * (size_t)count, sizeof(double));
+    g->storage = model_allocate(inst, MOTION_DOUBLES(count), sizeof(double));
+    double *scratch = model_allocate(inst, 4 * (size_t)count, sizeof(double));
     if (g->storage == NULL || scratch == NULL) {
-        fmi2_release(inst, scratch);
-        fmi2_release(inst, work);
-        return fmi2_fail(inst, "%s: out of memory for the move", function);
+        model_release(inst, scratch);
+        model_release(inst, work);
+        return model_fail(inst, "%s: out of memory for the move", function);
     }
     motion_shaped_bang_bang(&g->path, g->storage, scratch, real_of(inst, MOTION_DISTANCE),
                             real_of(inst, MOTION_ACCELERATION_LIMIT), real_of(inst, MOTION_SPEED), times, amplitudes, count);
-    fmi2_release(inst, scratch);
-    fmi2_release(inst, work);
-    return fmi2OK;
+    model_release(inst, scratch);
+    model_release(inst, work);
+    return MODEL_OK;
 }
 
-fmi2Status model_exit_initialization(Fmi2Instance *inst) {
+static ModelStatus exit_initialization(ModelInstance *inst, const char *function) {
     Generator *g = generator_of(inst);
-    if (motion_shaper.bang_bang && design(inst, "fmi2ExitInitializationMode") != fmi2OK) return fmi2Error;
+    if (motion_shaper.bang_bang && design(inst, function) != MODEL_OK) return MODEL_ERROR;
     g->has_start = 0;
     memset(&g->elapsed, 0, sizeof g->elapsed);
     maybe_start(inst, 0.0);
     update(inst, 0.0);
     g->started = 1;
-    return fmi2OK;
+    return MODEL_OK;
 }
 
-fmi2Status model_update(Fmi2Instance *inst, const char *function) {
-    (void)inst, (void)function;
-    return fmi2OK;
-}
 
-fmi2Status model_do_step(Fmi2Instance *inst, double t, double h) {
+static ModelStatus do_step(ModelInstance *inst, double t, double h, const char *function) {
+    (void)function;
     Generator *g = generator_of(inst);
     (void)t;
     maybe_start(inst, step_time_value(&g->elapsed));
@@ -203,13 +190,13 @@ fmi2Status model_do_step(Fmi2Instance *inst, double t, double h) {
     if (!g->has_start && scheduled(inst, elapsed))
         g->has_start = 1, g->started_at = inst->reals[g->vr[MOTION_T_START]] - inst->start_time;
     update(inst, elapsed);
-    return fmi2OK;
+    return MODEL_OK;
 }
 
 /* ---------------------------------------------------------------- values */
 
-static fmi2Status keeps(Fmi2Instance *inst, const TwinVariable *v, const char *given, int same, const char *function) {
-    if (same) return fmi2OK;
+static ModelStatus keeps(ModelInstance *inst, const VariableRow *v, const char *given, int same, const char *function) {
+    if (same) return MODEL_OK;
     return twin_refuse(inst, v, given, "move is", "shapefmu build profile --native", function);
 }
 
@@ -220,65 +207,59 @@ static int redesigned(int m) {
     return motion_shaper.closed_form && m >= MOTION_SHAPER && m <= MOTION_ZETA4;
 }
 
-fmi2Status model_check_real(Fmi2Instance *inst, size_t vr, double value, const char *function) {
-    const TwinVariable *v = &motion_variables.variables[vr];
+static ModelStatus check_real(ModelInstance *inst, size_t vr, double value, const char *function) {
+    const VariableRow *v = &motion_variables.rows[vr];
     const int m = v->meaning;
-    if (!isfinite(value)) return fmi2_fail(inst, "%s: %s must be finite, got %g", function, v->name, value);
-    if (m == MOTION_T_START || m == MOTION_START || m >= MOTION_POSITION) return fmi2OK;
+    if (!isfinite(value)) return model_fail(inst, "%s: %s must be finite, got %g", function, v->name, value);
+    if (m == MOTION_T_START || m == MOTION_START || m >= MOTION_POSITION) return MODEL_OK;
     if (redesigned(m)) {
         const char *valid = (m == MOTION_DISTANCE || m == MOTION_ACCELERATION_LIMIT || (m >= MOTION_OMEGA1 && m <= MOTION_OMEGA4))
                             && !(value > 0.0) ? "> 0"
                             : m == MOTION_SPEED && !(value >= 0.0) ? ">= 0 (0: no speed limit)"
                             : m >= MOTION_ZETA1 && !(value >= 0.0 && value < 1.0) ? "in [0, 1)" : NULL;
-        if (valid != NULL) return fmi2_fail(inst, "%s: %s must be %s, got %g", function, v->name, valid, value);
-        return fmi2OK;
+        if (valid != NULL) return model_fail(inst, "%s: %s must be %s, got %g", function, v->name, valid, value);
+        return MODEL_OK;
     }
     char given[32];
     snprintf(given, sizeof given, "%.17g", value);
     return keeps(inst, v, given, value == v->start, function);
 }
 
-fmi2Status model_check_integer(Fmi2Instance *inst, size_t vr, int value, const char *function) {
-    const TwinVariable *v = &motion_variables.variables[vr];
+static ModelStatus check_integer(ModelInstance *inst, size_t vr, int value, const char *function) {
+    const VariableRow *v = &motion_variables.rows[vr];
     if (redesigned(v->meaning)) {
         if (v->meaning == MOTION_ORDER && (value < 0 || value > 62))
-            return fmi2_fail(inst, "%s: n must be an integer in [0, 62], got %d", function, value);
+            return model_fail(inst, "%s: n must be an integer in [0, 62], got %d", function, value);
         if (v->meaning == MOTION_MODES && (value < 1 || value > MOTION_MAX_MODES))
-            return fmi2_fail(inst, "%s: n_modes must be in [1, %d], got %d", function, MOTION_MAX_MODES, value);
-        return fmi2OK;
+            return model_fail(inst, "%s: n_modes must be in [1, %d], got %d", function, MOTION_MAX_MODES, value);
+        return MODEL_OK;
     }
     char given[32];
     snprintf(given, sizeof given, "%d", value);
     return keeps(inst, v, given, value == (int)v->start, function);
 }
 
-fmi2Status model_check_string(Fmi2Instance *inst, size_t vr, const char *value, const char *function) {
-    const TwinVariable *v = &motion_variables.variables[vr];
+static ModelStatus check_string(ModelInstance *inst, size_t vr, const char *value, const char *function) {
+    const VariableRow *v = &motion_variables.rows[vr];
     if (redesigned(v->meaning)) {
-        if (strcmp(value, "none") == 0 || closed_form_kind(value) != KIND_NOT_CLOSED_FORM) return fmi2OK;
-        return fmi2_fail(inst, "%s: shaper must be none or a kind this FMU designs in C (zv, zvd, zvdd, zv_dn, mzv), "
+        if (strcmp(value, "none") == 0 || closed_form_kind(value) != KIND_NOT_CLOSED_FORM) return MODEL_OK;
+        return model_fail(inst, "%s: shaper must be none or a kind this FMU designs in C (zv, zvd, zvdd, zv_dn, mzv), "
                          "got %s; other kinds are designed at build time: shapefmu build profile --native --param "
                          "shaper=%s", function, value, value);
     }
     return keeps(inst, v, value, strcmp(value, v->string_start) == 0, function);
 }
 
-void model_changed(Fmi2Instance *inst, size_t vr) {
+static void changed(ModelInstance *inst, size_t vr) {
     Generator *g = generator_of(inst);
-    if (motion_variables.variables[vr].meaning != MOTION_START || !g->started || g->has_start) return;
+    if (motion_variables.rows[vr].meaning != MOTION_START || !g->started || g->has_start) return;
     if (inst->reals[vr] >= 0.5) {
         g->has_start = 1, g->started_at = step_time_value(&g->elapsed);
         update(inst, g->started_at);
     }
 }
 
-void model_states_changed(Fmi2Instance *inst) { (void)inst; }
 
-fmi2Status model_partial_derivative(Fmi2Instance *inst, size_t unknown, size_t known, double *entry,
-                                    const char *function) {
-    (void)unknown, (void)known, (void)entry;
-    return fmi2_fail(inst, "%s: this FMU provides no directional derivatives", function);
-}
 
 /* ---------------------------------------------------------------- state */
 
@@ -290,18 +271,18 @@ typedef struct {
     StepTime elapsed;
 } StateBytes;
 
-size_t model_state_size(const Fmi2Instance *inst) {
+static size_t state_size(const ModelInstance *inst) {
     (void)inst;
     return sizeof(StateBytes);
 }
 
-void model_save_state(const Fmi2Instance *inst, unsigned char *bytes) {
+static void save_state(const ModelInstance *inst, unsigned char *bytes) {
     const Generator *g = generator_of(inst);
     const StateBytes saved = {(long long)STATE_MAGIC, g->started, g->has_start, g->started_at, g->elapsed};
     memcpy(bytes, &saved, sizeof saved);
 }
 
-int model_restore_state(Fmi2Instance *inst, const unsigned char *bytes, size_t size) {
+static int restore_state(ModelInstance *inst, const unsigned char *bytes, size_t size, const char *function) {
     Generator *g = generator_of(inst);
     StateBytes saved;
     if (size != sizeof saved) return -1;
@@ -313,6 +294,13 @@ int model_restore_state(Fmi2Instance *inst, const unsigned char *bytes, size_t s
     g->started = saved.started, g->has_start = saved.has_start, g->started_at = saved.started_at;
     g->elapsed = saved.elapsed;
     /* a re-designed move follows from the parameters the layer has just restored */
-    if (saved.started && motion_shaper.bang_bang && design(inst, "fmi2SetFMUstate") != fmi2OK) return -1;
+    if (saved.started && motion_shaper.bang_bang && design(inst, function) != MODEL_OK) return -1;
     return 0;
 }
+
+const ModelPart model_part = {
+    .variables = &motion_variables, .instantiate = instantiate, .free = free_model, .reset = reset,
+    .check_real = check_real, .check_integer = check_integer, .check_string = check_string, .changed = changed,
+    .exit_initialization = exit_initialization, .do_step = do_step,
+    .state_size = state_size, .save_state = save_state, .restore_state = restore_state,
+};

@@ -22,37 +22,43 @@ re-acquisition statistic, the shaper's ring buffer and any pending design.
 
 import math
 
-from ....runtime.checks import check_count, check_positive
-from ....runtime.ekf import ResonanceEKF
-from ....runtime.ekf_tuner import KINDS, EKFTunedShaperKernel
-from ....runtime.sample_clock import EKF_SAMPLE_SECONDS, SampleClock, samples_per_python_step
-from ....runtime.shaper_filter import StreamingShaper
-from ..slave_base import Fmi2Slave, sampled_description
+from ...runtime.checks import check_count, check_positive
+from ...runtime.ekf import ResonanceEKF
+from ...runtime.ekf_tuner import KINDS, EKFTunedShaperKernel
+from ...runtime.sample_clock import EKF_SAMPLE_SECONDS, SampleClock, samples_per_python_step
+from ...runtime.shaper_filter import StreamingShaper
+from .interface import Interface, input_, output, parameter, sampled_description
+from .model import Model as _Model
 
-class EKFTuner(Fmi2Slave):
-    model_name = "EKFTuner"
-    description = sampled_description(
+INTERFACE = Interface(
+    "EKFTuner",
+    sampled_description(
         "EKF-tuned input shaper: estimates the vibration's mode and shapes the command for it (paper 001)",
         "u and vibration",
-    )
+    ),
+    (
+        parameter("kind", "zvd", f"shaper designed for the estimated mode: {', '.join(KINDS)}"),
+        parameter("n", 1, "derivative order of zv_dn (0 = ZV, 1 = ZVD, ...)", minimum=0),
+        parameter("Ts", 1e-3, "sampling period of the EKF and the shaper", unit="s"),
+        parameter("omega0", 2.0 * math.pi * 10.0, "initial guess of the vibration's frequency", unit="rad/s"),
+        parameter("amplitude", 1.0, "scale of the vibration signal the EKF tuning is relative to"),
+        parameter("retune_fraction", 0.05, "re-design when the estimate moves by more than this fraction"),
+        input_("u", 0.0, "command to shape"),
+        input_("vibration", 0.0, "measured vibration (ring-down) the EKF watches"),
+        output("y", "shaped command (the command itself until a shaper is switched in)"),
+        output("omega_est", "estimated undamped natural frequency", unit="rad/s"),
+        output("zeta_est", "estimated damping ratio"),
+        output("converged", "1 once the EKF estimate has converged, else 0"),
+    ),
+    command_in="u",
+    command_out="y",
+)
+
+
+class Model(_Model):
+    interface = INTERFACE
     kernels = (EKFTunedShaperKernel, ResonanceEKF, StreamingShaper, SampleClock)
     state_attributes = ("tuner", "clock")
-
-    def declare(self):
-        self.parameter("kind", "zvd", f"shaper designed for the estimated mode: {', '.join(KINDS)}")
-        self.parameter("n", 1, "derivative order of zv_dn (0 = ZV, 1 = ZVD, ...)", minimum=0)
-        self.parameter("Ts", 1e-3, "sampling period of the EKF and the shaper", unit="s")
-        self.parameter("omega0", 2.0 * math.pi * 10.0, "initial guess of the vibration's frequency", unit="rad/s")
-        self.parameter("amplitude", 1.0, "scale of the vibration signal the EKF tuning is relative to")
-        self.parameter("retune_fraction", 0.05, "re-design when the estimate moves by more than this fraction")
-        self.input("u", 0.0, "command to shape")
-        self.input("vibration", 0.0, "measured vibration (ring-down) the EKF watches")
-        self.output("y", "shaped command (the command itself until a shaper is switched in)")
-        self.output("omega_est", "estimated undamped natural frequency", unit="rad/s")
-        self.output("zeta_est", "estimated damping ratio")
-        self.output("converged", "1 once the EKF estimate has converged, else 0")
-        self.tuner = None
-        self.clock = None
 
     def initialize(self):
         values = self.values
@@ -78,13 +84,14 @@ class EKFTuner(Fmi2Slave):
         self.values["zeta_est"] = ekf.zeta
         self.values["converged"] = 1.0 if ekf.converged else 0.0
 
-    def output_dependencies(self):
-        return {"y": [], "omega_est": [], "zeta_est": [], "converged": []}
-
     def experiment(self):
         """DefaultExperiment: 200 periods of the guessed frequency, one sample per step."""
         ts = self.values["Ts"]
         return 0.0, ts * math.ceil(200 * 2.0 * math.pi / self.values["omega0"] / ts), ts
+
+    def picture(self):
+        """The ring-down the EKF watches: four periods of the guessed frequency, decaying."""
+        return [("line", [(k / 32, math.exp(-k / 64) * math.cos(math.pi * k / 16)) for k in range(129)])]
 
     def step(self, t, h):
         values, tuner = self.values, self.tuner
