@@ -16,7 +16,7 @@ import math
 import numpy as np
 import pytest
 
-from shapefmu.cosim.compare import FMUCache
+from shapefmu.compare.cache import FMUCache
 from shapefmu.cosim.master import Master
 from shapefmu.fmi.native import build_plant_fmu, model_from_file
 from shapefmu.fmi.ssp import System

@@ -4,7 +4,7 @@
 #ifndef JERK_INTERNAL_H
 #define JERK_INTERNAL_H
 
-#include "jerk_planner.h"
+#include "jerk_types.h"
 
 #define MAXP JP_MAX_PHASES
 

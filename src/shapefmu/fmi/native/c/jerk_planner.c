@@ -2,6 +2,7 @@
  * Part of the C twin of the motion planner (jerk_planner.h); the order of the floating-point operations
  * follows the Python code, so that both plan the same move to rounding. */
 #include "jerk_internal.h"
+#include "jerk_planner.h"
 
 #include <math.h>
 #include <stdio.h>

@@ -1,5 +1,6 @@
 /* The online jerk-limited multi-axis planner with vibration bounds in C (jerk_axis.c, jerk_sync.c,
- * jerk_vibration.c, jerk_planner.c; their shared internals in jerk_internal.h): the twin of
+ * jerk_vibration.c, jerk_planner.c; their shared internals in jerk_internal.h, the types both
+ * see in jerk_types.h): the twin of
  * runtime/jerk_profiles.py, jerk_duration.py, jerk_sync.py, jerk_vibration.py and jerk_planner.py,
  * operation for operation, so that a native FMU plans what the Python kernel plans (to rounding).
  *
@@ -10,30 +11,7 @@
 #ifndef JERK_PLANNER_H
 #define JERK_PLANNER_H
 
-#define JP_MAX_AXES 8
-#define JP_MAX_MODES 4       /* per axis */
-#define JP_MAX_PHASES 256    /* per axis and move */
-#define JP_MAX_IMPULSES 64   /* per ceiling shaper */
-#define JP_MAX_SHAPERS 8     /* ceiling shapers per axis, shortest first */
-
-typedef struct {
-    double v_max, v_min, a_max, a_min, j_max;  /* v_min, a_min < 0 */
-} JpLimits;
-
-typedef struct {
-    double omega, zeta, delta, vtol;  /* rad/s; band +- delta omega; bound vtol of the rigid residual */
-} JpMode;
-
-typedef struct {
-    int count;  /* 0: no shaper (the axis has no modes) */
-    double times[JP_MAX_IMPULSES], amplitudes[JP_MAX_IMPULSES];
-} JpShaper;
-
-typedef struct {
-    int count;
-    double start[3];  /* p, v, a */
-    double durations[JP_MAX_PHASES], jerks[JP_MAX_PHASES];
-} JpAxisPhases;
+#include "jerk_types.h"
 
 typedef struct {
     int axes;
@@ -60,7 +38,6 @@ typedef struct {
 /* Every buffer a plan works in, owned by the caller: the planner keeps nothing between calls and no
  * two workspaces share anything, so instances (an FMU's, a host's threads) plan at the same time,
  * each in its own workspace. NULL when out of memory. */
-typedef struct JpWorkspace JpWorkspace;
 JpWorkspace *jp_workspace_new(void);
 void jp_workspace_free(JpWorkspace *workspace);
 
