@@ -14,7 +14,7 @@ import argparse
 import json
 import math
 
-from shapefmu.cli.arguments import examples, output_file, say_written
+from shapefmu.cli.arguments import examples, output_file, parse_mode_hz, say_written
 from shapefmu.files import write_text
 
 
@@ -38,19 +38,12 @@ def _axis(text: str):
 
 
 def _mode(text: str):
+    """``[AXIS:]HZ:ZETA`` -> (axis or None, f Hz, zeta); the numbers checked as every --mode is."""
     parts = text.split(":")
     axis = parts.pop(0) if len(parts) == 3 else None
     if len(parts) != 2:
         raise argparse.ArgumentTypeError(f"--mode must be [AXIS:]HZ:ZETA, e.g. x:40:0.05, got {text!r}")
-    try:
-        hz, zeta = float(parts[0]), float(parts[1])
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"--mode frequency and damping must be numbers, got {text!r}") from None
-    if not (math.isfinite(hz) and hz > 0.0):
-        raise argparse.ArgumentTypeError(f"--mode frequency must be > 0 Hz, got {parts[0]!r}")
-    if not (math.isfinite(zeta) and 0.0 <= zeta < 1.0):
-        raise argparse.ArgumentTypeError(f"--mode damping ratio must be in [0, 1), got {parts[1]!r}")
-    return axis, hz, zeta
+    return (axis, *parse_mode_hz(":".join(parts)))
 
 
 def _cmd_plan(args) -> int:
