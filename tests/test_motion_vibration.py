@@ -16,7 +16,7 @@ import pytest
 from shapefmu.fmi.native import jerk_planner as native
 from shapefmu.motion import AxisLimits, plan
 from shapefmu.runtime import jerk_vibration
-from shapefmu.runtime.jerk_profiles import Limits, Phases
+from shapefmu.runtime.jerk_profiles import Phases
 from support.motion_cases import (EXAMPLE_LIMITS, assert_ends_in, assert_within, band, example_plan, example_ruckig,
                                   mode_amplitude, random_problem, ruckig_phases, ruckig_trajectory)
 
