@@ -20,6 +20,7 @@ PACKAGE = Path(shapefmu.__file__).parent
 LAYERS = {
     "runtime": 0,
     "shapers": 1, "analysis": 1, "estimation": 1, "stos": 1, "optimal": 1, "plants": 1, "plots": 1, "identification": 1,
+    "motion": 1,
     "files": 1,
     "fmi": 2,
     "cosim": 3,

@@ -31,11 +31,11 @@ import zipfile
 import zlib
 
 from shapefmu import __version__
-from shapefmu.cli import build, design, extras, identify, moves, plant, simulate, sweep
+from shapefmu.cli import build, design, extras, identify, motion, moves, plant, simulate, sweep
 from shapefmu.cli.signals import exit_code, interrupts
 
 # The order of the groups in ``shapefmu --help``.
-COMMAND_GROUPS = (design, identify, plant, moves, build, sweep, simulate)
+COMMAND_GROUPS = (design, identify, plant, moves, motion, build, sweep, simulate)
 
 DESCRIPTION = """Design vibration-suppressing commands for flexible machines (input shapers, shape filters,
 motion profiles, time-optimal and STOS moves), package them as FMI 2.0/3.0 FMUs, and run them
