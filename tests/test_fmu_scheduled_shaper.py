@@ -10,7 +10,7 @@ import json
 import numpy as np
 import pytest
 from support.fixtures_fmi import SCHEDULED_STARTS
-from support.fmpy_slaves import initialised
+from support.fmpy_slaves import initialised, refused_start_values
 from test_scheduled_shaper import BED, FS, change_by_change, closed_form_taps, schedule_mode
 
 from shapefmu.fmi.kinds.scheduled_shaper import schedule_start_values
@@ -128,3 +128,29 @@ def test_a_bad_table_fails_the_build_naming_the_row(tmp_path):
     with pytest.raises(ValueError, match=r"zetas\[1\]"):
         build_fmu("ScheduledShaper", tmp_path / "bad.fmu", **schedule_start_values([0.0, 1.0], [30.0, 26.0],
                                                                                    [0.05, 1.2]))
+
+
+@pytest.mark.parametrize(("parameters", "named"), [
+    ({"values[2]": -1.0}, "values"),  # the rows' values not increasing: at the exit of initialisation
+    ({"zeta[1]": 1.0}, "zeta"),
+    ({"Ts": 0.0}, "Ts"),
+    ({"resolution": -1e-3}, "resolution"),
+    ({"n_rows": 9}, "n_rows must be in [1, 8]"),
+    ({"extrapolate": True, "scheduling": 1e6}, "scheduling value"),  # the law continued to f < 0
+])
+def test_a_bad_parameter_is_refused_with_a_message_naming_it(bed, capfd, parameters, named):
+    refused_start_values(bed("zv"), parameters)
+    assert named in capfd.readouterr().out
+
+
+def test_the_native_twin_refuses_what_it_cannot_design_in_c(builds, tmp_path, capfd):
+    """The closed-form kinds only (the C re-designs them at every sample where the mode moved), zv_dn up to n = 62."""
+    from shapefmu.fmi.native.twins import build_native
+
+    with pytest.raises(ValueError, match=r"kind must be one of zv, zvd, zvdd, zv_dn, mzv for the native ScheduledShaper"):
+        build_native("ScheduledShaper", tmp_path / "ei.fmu", kind="ei")
+    native = builds.native("ScheduledShaper", **SCHEDULED_STARTS, kind="zv")
+    refused_start_values(native, {"kind": "ei2"}, when_set=True)
+    refused_start_values(native, {"n": 63}, when_set=True)
+    printed = capfd.readouterr().out
+    assert "kind must be one of zv, zvd, zvdd, zv_dn, mzv" in printed and "n must be an integer in [0, 62]" in printed
