@@ -144,11 +144,18 @@ def test_a_bad_parameter_is_refused_with_a_message_naming_it(bed, capfd, paramet
 
 
 def test_the_native_twin_refuses_what_it_cannot_design_in_c(builds, tmp_path, capfd):
-    """The closed-form kinds only (the C re-designs them at every sample where the mode moved), zv_dn up to n = 62."""
+    """The closed-form kinds only (the C re-designs them at every sample where the mode moved), zv_dn up to
+    n = 62: refused by the builder (and ``shapefmu build scheduled-shaper --native``) and when set."""
     from shapefmu.fmi.native.twins import build_native
+
+    from shapefmu.cli import main
 
     with pytest.raises(ValueError, match=r"kind must be one of zv, zvd, zvdd, zv_dn, mzv for the native ScheduledShaper"):
         build_native("ScheduledShaper", tmp_path / "ei.fmu", kind="ei")
+    with pytest.raises(SystemExit) as refused:
+        main(["build", "scheduled-shaper", "--native", "--param", "kind=ei3", "-o", str(tmp_path / "ei3.fmu")])
+    assert refused.value.code == 2
+    assert "for the native ScheduledShaper" in capfd.readouterr().err and not (tmp_path / "ei3.fmu").exists()
     native = builds.native("ScheduledShaper", **SCHEDULED_STARTS, kind="zv")
     refused_start_values(native, {"kind": "ei2"}, when_set=True)
     refused_start_values(native, {"n": 63}, when_set=True)
