@@ -364,7 +364,8 @@ static int instantiate(ModelInstance *inst) {
     inst->model = s;
     s->inst = inst;
     twin_index(&scheduled_model, s->vr, SCHEDULED_MEANINGS);
-    const size_t n = scheduled_model.n_real + scheduled_model.n_integer + scheduled_model.n_boolean + scheduled_model.n_string;
+    const VariableTable *table = &scheduled_model;
+    const size_t n = table->n_real + table->n_integer + table->n_boolean + table->n_string;
     for (size_t vr = 0; vr < n; vr++) {
         const VariableRow *v = &scheduled_model.rows[vr];
         const int i = element(v->name);
@@ -428,35 +429,28 @@ static ModelStatus exit_initialization(ModelInstance *inst, const char *function
 
 static ModelStatus do_step(ModelInstance *inst, double t, double h, const char *function) {
     Scheduled *s = scheduled_of(inst);
-    const GridStep step = grid_step(&s->clock.at, s->clock.ts, t, h);
-    if (step.count > (double)MAX_SAMPLES_PER_STEP)
-        return model_fail(inst, "%s: communication step h = %g s spans %.0f samples of Ts = %g s; at most %lld "
-                         "per step", function, h, step.count, s->clock.ts, MAX_SAMPLES_PER_STEP);
     const double inputs[2] = {real_of(inst, SCHEDULED_COMMAND), real_of(inst, SCHEDULED_SCHEDULING)};
-    clock_take(&s->clock, &step, inputs, 2, commit, s);
+    if (twin_clock_step(inst, &s->clock, t, h, inputs, 2, commit, s, function) != MODEL_OK) return MODEL_ERROR;
     if (s->failure != NULL) return model_fail(inst, "%s: at t = %g s: %s", function, t, s->failure);
     return MODEL_OK;
 }
 
 /* ---------------------------------------------------------------- the part's hooks: values */
 
-static ModelStatus range(ModelInstance *inst, const char *name, double value, int ok, const char *valid,
-                        const char *function) {
-    if (ok && isfinite(value)) return MODEL_OK;
-    return model_fail(inst, "%s: %s must be %s, got %g", function, name, valid, value);
-}
-
 static ModelStatus check_real(ModelInstance *inst, size_t vr, double value, const char *function) {
     Scheduled *s = scheduled_of(inst);
     const VariableRow *v = &scheduled_model.rows[vr];
     switch (v->meaning) {
-    case SCHEDULED_PERIOD: case SCHEDULED_FREQUENCY: return range(inst, v->name, value, value > 0.0, "> 0", function);
-    case SCHEDULED_DAMPING: return range(inst, v->name, value, value >= 0.0 && value < 1.0, "in [0, 1)", function);
-    case SCHEDULED_TOLERANCE: return range(inst, v->name, value, value > 0.0 && value < 1.0, "in (0, 1)", function);
-    case SCHEDULED_RESOLUTION: return range(inst, v->name, value, value >= 0.0, ">= 0", function);
+    case SCHEDULED_PERIOD: case SCHEDULED_FREQUENCY:
+        return twin_range(inst, v->name, value, value > 0.0, "> 0", function);
+    case SCHEDULED_DAMPING:
+        return twin_range(inst, v->name, value, value >= 0.0 && value < 1.0, "in [0, 1)", function);
+    case SCHEDULED_TOLERANCE:
+        return twin_range(inst, v->name, value, value > 0.0 && value < 1.0, "in (0, 1)", function);
+    case SCHEDULED_RESOLUTION: return twin_range(inst, v->name, value, value >= 0.0, ">= 0", function);
     case SCHEDULED_SCHEDULING: {
         /* the value the output is computed for at once (an open sample) must give a mode and a design */
-        if (range(inst, v->name, value, 1, "finite", function) != MODEL_OK) return MODEL_ERROR;
+        if (twin_range(inst, v->name, value, 1, "finite", function) != MODEL_OK) return MODEL_ERROR;
         double omega = s->mode_omega, zeta = s->mode_zeta;
         if (!s->started || s->clock.latched || value == s->value) return MODEL_OK;
         if (schedule_mode(s, value, &omega, &zeta) != 0 || (moved(s, omega, zeta) && design(s, omega, zeta) != 0)) {
@@ -465,7 +459,7 @@ static ModelStatus check_real(ModelInstance *inst, size_t vr, double value, cons
         }
         return MODEL_OK;
     }
-    default: return range(inst, v->name, value, 1, "finite", function);
+    default: return twin_range(inst, v->name, value, 1, "finite", function);
     }
 }
 
@@ -548,6 +542,8 @@ static int taps_valid(const Tap *taps, long long n, long long reach) {
     return taps[n - 1].delay + 1 == reach;
 }
 
+static int mode_valid(double omega, double zeta) { return omega > 0.0 && isfinite(omega) && zeta >= 0.0 && zeta < 1.0; }
+
 static int restore_state(ModelInstance *inst, const unsigned char *bytes, size_t size, const char *function) {
     (void)function;
     Scheduled *s = scheduled_of(inst);
@@ -561,8 +557,7 @@ static int restore_state(ModelInstance *inst, const unsigned char *bytes, size_t
     read_settings(inst);
     const int ring_ok = h.ring_size >= 1 && h.ring_size <= MAX_RING && (h.ring_size & (h.ring_size - 1)) == 0;
     if (!ring_ok || h.k < 0 || h.designs < 1 || h.count < 1 || h.count > MAX_RING + 1 || !isfinite(h.value)
-        || !isfinite(h.last) || !(h.mode_omega > 0.0 && isfinite(h.mode_omega)) || !(h.mode_zeta >= 0.0 && h.mode_zeta < 1.0)
-        || !(h.design_omega > 0.0 && isfinite(h.design_omega)) || !(h.design_zeta >= 0.0 && h.design_zeta < 1.0)
+        || !isfinite(h.last) || !mode_valid(h.mode_omega, h.mode_zeta) || !mode_valid(h.design_omega, h.design_zeta)
         || !clock_valid(&h.clock, 2) || h.clock.ts != real_of(inst, SCHEDULED_PERIOD)
         || (size - sizeof h) / sizeof(double) < (size_t)h.ring_size)
         return -1;
