@@ -72,7 +72,7 @@ typedef struct {
     double value, mode_omega, mode_zeta;
     /* ModeFollowingShaper: the mode designed for, the next sample, the newest command */
     double design_omega, design_zeta, last;
-    long long designs, k;
+    long long k;
     double *ring;           /* ring_size (a power of two) past commands: u[j] at ring[j & (ring_size - 1)] */
     long long ring_size;
     Segment *segments;      /* a deque: the m-th in flight at segments[(head + m) & (capacity - 1)] */
@@ -272,7 +272,6 @@ static int shaper_step(Scheduled *s, double u, double omega, double zeta) {
     if (moved(s, omega, zeta)) {
         if (design(s, omega, zeta) != 0) return -1;
         s->design_omega = omega, s->design_zeta = zeta;
-        s->designs++;
         Segment *current = newest(s);
         if (current->moved) {  /* the changes made so far keep their design: a new segment begins here */
             current->open = 0, current->end = k - 1, current->end_value = s->last;
@@ -414,7 +413,7 @@ static ModelStatus exit_initialization(ModelInstance *inst, const char *function
     if (schedule_mode(s, s->value, &s->mode_omega, &s->mode_zeta) != 0 || design(s, s->mode_omega, s->mode_zeta) != 0)
         return model_fail(inst, "%s: %s", function, s->failure);
     s->design_omega = s->mode_omega, s->design_zeta = s->mode_zeta;
-    s->designs = 1, s->k = 0, s->ring_size = 1;
+    s->k = 0, s->ring_size = 1;
     s->ring = model_allocate(inst, 1, sizeof(double));
     s->capacity = 4;
     s->segments = model_allocate(inst, (size_t)s->capacity, sizeof(Segment));
@@ -486,7 +485,7 @@ static ModelStatus check_string(ModelInstance *inst, size_t vr, const char *valu
  * segment in flight: its scalars and its taps. */
 
 typedef struct {
-    long long magic, started, designs, k, ring_size, count;
+    long long magic, started, k, ring_size, count;
     double value, mode_omega, mode_zeta, design_omega, design_zeta, last;
     SampleClock clock;
 } StateHeader;
@@ -506,7 +505,7 @@ static void save_state(const ModelInstance *inst, unsigned char *bytes) {
     memset(&header, 0, sizeof header);
     header.magic = (long long)STATE_MAGIC, header.started = s->started;
     if (s->started) {
-        header.designs = s->designs, header.k = s->k, header.ring_size = s->ring_size, header.count = s->count;
+        header.k = s->k, header.ring_size = s->ring_size, header.count = s->count;
         header.value = s->value, header.mode_omega = s->mode_omega, header.mode_zeta = s->mode_zeta;
         header.design_omega = s->design_omega, header.design_zeta = s->design_zeta, header.last = s->last;
         header.clock = s->clock;
@@ -556,7 +555,7 @@ static int restore_state(ModelInstance *inst, const unsigned char *bytes, size_t
     if (!h.started) return size == sizeof h ? 0 : -1;
     read_settings(inst);
     const int ring_ok = h.ring_size >= 1 && h.ring_size <= MAX_RING && (h.ring_size & (h.ring_size - 1)) == 0;
-    if (!ring_ok || h.k < 0 || h.designs < 1 || h.count < 1 || h.count > MAX_RING + 1 || !isfinite(h.value)
+    if (!ring_ok || h.k < 0 || h.count < 1 || h.count > MAX_RING + 1 || !isfinite(h.value)
         || !isfinite(h.last) || !mode_valid(h.mode_omega, h.mode_zeta) || !mode_valid(h.design_omega, h.design_zeta)
         || !clock_valid(&h.clock, 2) || h.clock.ts != real_of(inst, SCHEDULED_PERIOD)
         || (size - sizeof h) / sizeof(double) < (size_t)h.ring_size)
@@ -587,7 +586,7 @@ static int restore_state(ModelInstance *inst, const unsigned char *bytes, size_t
         if (!taps_valid(g.taps, g.n_taps, g.reach)) goto refused;
     }
     if (at != end) goto refused;
-    s->designs = h.designs, s->k = h.k, s->value = h.value, s->mode_omega = h.mode_omega, s->mode_zeta = h.mode_zeta;
+    s->k = h.k, s->value = h.value, s->mode_omega = h.mode_omega, s->mode_zeta = h.mode_zeta;
     s->design_omega = h.design_omega, s->design_zeta = h.design_zeta, s->last = h.last, s->clock = h.clock;
     s->started = 1;
     return 0;
