@@ -318,6 +318,7 @@ static void commit(void *context, const double *inputs) {
 
 /* ---------------------------------------------------------------- the part's hooks: life cycle */
 
+/* Back to before initialisation: the run's buffers freed, no failure (also the reset hook). */
 static void release_run(ModelInstance *inst) {
     Scheduled *s = scheduled_of(inst);
     while (s->count > 0) pop_segment(s);
@@ -326,6 +327,7 @@ static void release_run(ModelInstance *inst) {
     s->segments = NULL, s->ring = NULL;
     s->head = s->capacity = s->ring_size = s->taps_in_flight = 0;
     s->started = s->has_pending = 0;
+    s->failure = NULL;
 }
 
 /* The settings of the run from the parameters (checked when they were set, and at the build). */
@@ -343,11 +345,6 @@ static void read_settings(ModelInstance *inst) {
     s->resolution = real_of(inst, SCHEDULED_RESOLUTION);
     s->fs = 1.0 / real_of(inst, SCHEDULED_PERIOD);
     s->h = 1.0 / s->fs;
-}
-
-static void reset(ModelInstance *inst) {
-    release_run(inst);
-    scheduled_of(inst)->failure = NULL;
 }
 
 /* i - 1 of a variable named base[i] (f[2] -> 1). */
@@ -387,9 +384,8 @@ static void free_model(ModelInstance *inst) {
 static ModelStatus update(ModelInstance *inst, const char *function) {
     Scheduled *s = scheduled_of(inst);
     if (!s->started) return MODEL_OK;
-    const double *latched = s->clock.v;
-    const double u = s->clock.latched ? latched[0] : real_of(inst, SCHEDULED_COMMAND);
-    const double value = s->clock.latched ? latched[1] : real_of(inst, SCHEDULED_SCHEDULING);
+    const double u = s->clock.latched ? s->clock.v[0] : real_of(inst, SCHEDULED_COMMAND);
+    const double value = s->clock.latched ? s->clock.v[1] : real_of(inst, SCHEDULED_SCHEDULING);
     if (output(s, u, value, &inst->reals[s->vr[SCHEDULED_OUTPUT]]) != 0)
         return model_fail(inst, "%s: %s", function, s->failure);
     return MODEL_OK;
@@ -398,7 +394,6 @@ static ModelStatus update(ModelInstance *inst, const char *function) {
 static ModelStatus exit_initialization(ModelInstance *inst, const char *function) {
     Scheduled *s = scheduled_of(inst);
     release_run(inst);
-    s->failure = NULL;
     read_settings(inst);
     for (int i = 1; i < s->rows; i++)
         if (!(s->values[i] > s->values[i - 1]))
@@ -551,7 +546,6 @@ static int restore_state(ModelInstance *inst, const unsigned char *bytes, size_t
     memcpy(&h, bytes, sizeof h);
     if (h.magic != (long long)STATE_MAGIC || (h.started != 0 && h.started != 1)) return -1;
     release_run(inst);
-    s->failure = NULL;
     if (!h.started) return size == sizeof h ? 0 : -1;
     read_settings(inst);
     const int ring_ok = h.ring_size >= 1 && h.ring_size <= MAX_RING && (h.ring_size & (h.ring_size - 1)) == 0;
@@ -596,7 +590,7 @@ refused:
 }
 
 const ModelPart model_part = {
-    .variables = &scheduled_model, .instantiate = instantiate, .free = free_model, .reset = reset,
+    .variables = &scheduled_model, .instantiate = instantiate, .free = free_model, .reset = release_run,
     .check_real = check_real, .check_integer = check_integer, .check_string = check_string, .update = update,
     .exit_initialization = exit_initialization, .do_step = do_step,
     .state_size = state_size, .save_state = save_state, .restore_state = restore_state,
