@@ -458,7 +458,7 @@ SCHEDULED_CASES = {
     "position mzv": {"kind": "mzv", "n_rows": 3, "values[1]": -1.0, "values[2]": 0.0, "values[3]": 1.0,
                      "f[1]": 12.0, "f[2]": 15.0, "f[3]": 20.0, "zeta[1]": 0.02, "zeta[2]": 0.05, "zeta[3]": 0.1,
                      "resolution": 1e-3, "Ts": 1e-3, "u0": 0.3},
-    # Marlin's linear law f = 30 - 12 value (two rows, extrapolated), ZV convolved three times
+    # Marlin's linear law f = 30 - 12 value (two rows, extrapolated), three ZVs convolved (zv_dn, n = 2)
     "law zv_dn": {"kind": "zv_dn", "n": 2, "n_rows": 2, "values[1]": 0.0, "values[2]": 1.0, "f[1]": 30.0,
                   "f[2]": 18.0, "zeta[1]": 0.03, "zeta[2]": 0.03, "extrapolate": True, "Ts": SCHEDULED_TS},
 }
@@ -466,8 +466,9 @@ SCHEDULING_SPAN = {"bed zv": (0.0, 300.0), "position mzv": (-1.2, 1.2), "law zv_
 
 
 def _moves_through_a_drift(case: str):
-    """Moves of the command (ramps of 40 ms, rests, a ripple) while the scheduling input drifts across
-    the case's span and back, with a jump: both inputs as functions of the time, so any steps sample them."""
+    """Moves of the command (a 2.5 Hz sine clipped at +-1: moves and rests; a 90 Hz ripple from 0.3 s) while
+    the scheduling input drifts across the case's span and back, with a jump at 0.55 s: both inputs as
+    functions of the time, so any steps sample them."""
     low, high = SCHEDULING_SPAN[case]
 
     def inputs(pair, times):
@@ -479,7 +480,7 @@ def _moves_through_a_drift(case: str):
     return inputs
 
 
-def _redesigned_while_moving(rows) -> None:
+def _moved_and_shaped(rows) -> None:
     assert np.ptp(np.asarray(rows)) > 1.0 and len({row[0] for row in rows}) > 100  # it moved, and shaped
 
 
@@ -498,15 +499,15 @@ class ScheduledShaperTwin(Twin):
     read_before = True
     host_step = SCHEDULED_TS
     steps_of_ts = tuple(Run(case, steps_of(SCHEDULED_CASES[case]["Ts"], 1000), _moves_through_a_drift(case),
-                            check=_redesigned_while_moving) for case in SCHEDULED_CASES)
+                            check=_moved_and_shaped) for case in SCHEDULED_CASES)
     hosts = Run("bed zv", steps_of(SCHEDULED_TS, 600), _moves_through_a_drift("bed zv"))
     random = tuple(Run(case, random_times(12, 1200, lambda rng, n: rng.choice([0.3, 0.5, 1.0, 1.7, 4.0], size=n) * 5e-4,
-                                          9, 1e-13), _moves_through_a_drift(case), check=_redesigned_while_moving)
+                                          9, 1e-13), _moves_through_a_drift(case), check=_moved_and_shaped)
                    for case in ("bed zv", "position mzv"))
-    changes = (Run("bed zv", steps_of(1e-3, 700), _moves_through_a_drift("bed zv"), check=_redesigned_while_moving,
+    changes = (Run("bed zv", steps_of(1e-3, 700), _moves_through_a_drift("bed zv"), check=_moved_and_shaped,
                    parameters={"kind": "zvd", "Ts": 1e-3, "f[2]": 24.0, "resolution": 1e-3, "u0": 0.2}),
                Run("law zv_dn", steps_of(SCHEDULED_TS, 700), _moves_through_a_drift("law zv_dn"),
-                   check=_redesigned_while_moving, parameters={"kind": "mzv", "f[2]": 22.0, "zeta[2]": 0.05}))
+                   check=_moved_and_shaped, parameters={"kind": "mzv", "f[2]": 22.0, "zeta[2]": 0.05}))
     # the host's two inputs (sines a radian apart, a square on top): both the command and the position move
     c_host = CHost("position mzv", ("--random", 4, 1e-9, 2.5e-3, 3000, 1e-3, "--period", 0.35, "--square", 0.5),
                    lambda rows: np.ptp(rows[:, 3]) > 1.0)
