@@ -343,6 +343,9 @@ TARGETS = {
     "profile": ("the ProfileGenerator FMU: twin-pulse, time-frequency or shaped bang-bang moves",
                 *_parameter_target("ProfileGenerator", "ProfileGenerator"),
                 ("shapefmu build profile --param profile=TP -o fmus/ProfileGenerator.fmu",)),
+    "scheduled-shaper": ("the ScheduledShaper FMU (issue 37): re-designed for the mode a scheduling input puts in force",
+                         *_parameter_target("ScheduledShaper", "ScheduledShaper"),
+                         ("shapefmu build scheduled-shaper --native --param kind=zvd -o fmus/ScheduledShaper.fmu",)),
 }
 
 
