@@ -26,8 +26,9 @@ demo: $(STAMP)
 system-packages:
 	@bash .ci/system-packages
 
+# One worker per core, each taking whole test files (a file's fixtures, FMUs built once, stay in one worker).
 test: $(STAMP) system-packages
-	$(PY) -m pytest -q
+	$(PY) -m pytest -q -n auto --dist loadfile
 
 # Every paper's script: the design layer's (examples/<topic>.py) and the FMU path's (paper00*_fmu.py).
 examples: $(STAMP)
