@@ -91,3 +91,20 @@ def test_what_c_cannot_design_is_refused_when_the_native_fmu_is_built(tmp_path, 
     with pytest.raises(ValueError, match=re.escape(words)):
         build_native_tracked_shaper(tmp_path / "refused.fmu", **starts)
     assert not (tmp_path / "refused.fmu").exists()
+
+
+def test_the_command_line_builds_the_native_fmu_and_refuses_a_kind_c_cannot_design(tmp_path):
+    import zipfile
+
+    from fmpy import read_model_description
+    from hostile_support import guarded
+
+    out = tmp_path / "Tracked.fmu"
+    code, _, err = guarded(["build", "tracked-shaper", "--native", "--param", "kind=zvd", "--param", "f0=27",
+                            "-o", out], seconds=120)
+    assert code == 0, err
+    starts = {v.name: v.start for v in read_model_description(str(out)).modelVariables}
+    assert (starts["kind"], float(starts["f0"])) == ("zvd", 27.0)
+    assert "sources/tracked_shaper_part.c" in zipfile.ZipFile(out).namelist()
+    code, _, err = guarded(["build", "tracked-shaper", "--native", "--param", "kind=ei", "-o", tmp_path / "ei.fmu"])
+    assert code == 2 and err.count("\n") == 1 and "kind must be one of zv, zvd, zvdd, zv_dn, mzv" in err, err
