@@ -28,40 +28,24 @@ static double measurement(double t) {
     return sum;
 }
 
-static int run(fmi2Component c, double *t, int steps, double *out) {
-    static const double sizes[] = {1e-3, 2.5e-4, 1e-16, 3e-3, 7.5e-4, 1e-3};
-    const fmi2ValueReference in[2] = {vr_of("u"), vr_of("measurement")};
-    const fmi2ValueReference y[2] = {vr_of("y"), vr_of("f")};
-    for (int k = 0; k < steps; k++) {
-        const double values[2] = {command(*t), measurement(*t)};
-        CHECK(fmi2SetReal(c, in, 2, values));
-        CHECK(fmi2GetReal(c, y, 2, out));
-        CHECK(fmi2DoStep(c, *t, sizes[k % 6], fmi2True));
-        *t += sizes[k % 6];
-        CHECK(fmi2GetReal(c, y, 2, out));
-    }
-    return 0;
+static void inputs(double t, double values[2]) {
+    values[0] = command(t);
+    values[1] = measurement(t);
+}
+
+static int followed(const double *out) {
+    if (fabs(out[1] - 30.0) < 0.3) return 0;
+    fprintf(stderr, "the shaper did not follow the 30 Hz mode: f = %g\n", out[1]);
+    return 1;
 }
 
 int main(void) {
-    double out[2] = {0.0, 0.0}, t = 0.0;
+    static const TwoByTwo plan = {{"u", "measurement"}, {"y", "f"}, inputs, 1};
     fmi2Component c = initialising();
     if (c == NULL) return 1;
     const fmi2ValueReference resolution = vr_of("resolution");
     const double every_change = 0.0;
     CHECK(fmi2SetReal(c, &resolution, 1, &every_change));
     CHECK(fmi2ExitInitializationMode(c));
-    if (run(c, &t, 900, out)) return 1;
-    fmi2FMUstate state = NULL;
-    CHECK(fmi2GetFMUstate(c, &state));
-    if (run(c, &t, 1500, out)) return 1;
-    if (!(fabs(out[1] - 30.0) < 0.3)) { fprintf(stderr, "the shaper did not follow the 30 Hz mode: f = %g\n", out[1]); return 1; }
-    if (restore_serialised(c, &state)) return 1;
-    if (refuse_then_restart(c, t, 2e7, vr_of("f0"))) return 1;
-    t = 0.5;
-    if (run(c, &t, 300, out)) return 1;
-    CHECK(fmi2Terminate(c));
-    fmi2FreeInstance(c);
-    printf("ok %g\n", out[1]);
-    return 0;
+    return two_by_two_run(c, &plan, 900, 1500, followed, "f0", 300);
 }
