@@ -1,7 +1,7 @@
 /* The 4-state resonance EKF of paper 001, eqs. (15)-(26): runtime/ekf.py's ResonanceEKF in C,
  * operation for operation (its module docstring derives the OCR corrections), for the native EKF
- * tuner (ekf_tuner_part.c). The reference phase is 0 (H = [1, 0, 0, 0]) and the tuning is
- * runtime/ekf.py's default_tuning. */
+ * tuner (ekf_tuner_part.c, runtime/ekf.py's default_tuning) and the native tracked shaper
+ * (tracked_shaper_part.c, its own tuning). The reference phase is 0 (H = [1, 0, 0, 0]). */
 #include <math.h>
 #include <string.h>
 

@@ -46,8 +46,8 @@ void ekf_start_tuned(Ekf *e, double fs, double omega0, double sigma0, const doub
  * window, the convergence flags (e->omega_converged, e->sigma_converged, e->converged). Returns
  * whether z updated the filter (it was finite and the step needed no reset), as ResonanceEKF.step. */
 int ekf_step(Ekf *e, EkfHistory *history, double z);
-/* Whether e (with its window's history, rebuilt by ekf_rebuild_history) is a filter a run reaches,
- * as far as its sizes and flags go: what an FMU state restoring it must hold. */
+/* Whether e (its window's history is rebuilt by ekf_rebuild_history) is a filter a run reaches, as
+ * far as its sizes, flags and the finiteness of its estimates go: what an FMU state restoring it must hold. */
 int ekf_valid(const Ekf *e);
 /* ResonanceEKF.restart_phasor: a new ring begins; omega and sigma keep what they learnt. */
 void ekf_restart_phasor(Ekf *e);
