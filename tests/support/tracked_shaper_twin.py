@@ -75,8 +75,9 @@ class TrackedShaperTwin(Twin):
     read_before = True
     host_step = H
     CASES = {"zv": {"f0": 27.0, "Ts": H}, "zvd": {"kind": "zvd", "f0": 33.0, "zeta0": 0.02, "Ts": H / 2}}
-    steps_of_ts = (Run("zv", steps_of(H, 2000), _bed(0), check=_tracked_to_30_hz),
-                   Run("zvd", steps_of(H / 2, 4000), _bed(1), check=_tracked_to_30_hz))
+    # three moves: the first shaped for the guess, the EKF has the mode by the second
+    steps_of_ts = (Run("zv", steps_of(H, 1200), _bed(0), check=_tracked_to_30_hz),
+                   Run("zvd", steps_of(H / 2, 2400), _bed(1), check=_tracked_to_30_hz))
     hosts = Run("zv", steps_of(H, 600), _bed(2))
     # steps of 0.3 to 2.5 Ts, one in thirteen of 1e-12 s
     random = (Run("zv", random_times(7, 1500, lambda rng, n: rng.choice([0.3, 0.5, 1.0, 1.7, 2.5], size=n) * H, 13,
