@@ -1,7 +1,8 @@
 """The TrackedShaper FMU (fmi/kinds/tracked_shaper.py) in fmpy: its FMU state restores the run exactly,
 and a measurement that is not a number is refused naming it; the pythonfmu FMU and its native C twin
-(fmi/native/tracked_shaper.py) alike. The native FMU refuses bad parameters with a logged message, and
-what it cannot design in C (another kind, a longer shaper or EKF window than it holds) when it is built.
+(fmi/native/tracked_shaper.py) alike. The native FMU refuses bad parameters with a logged message (a
+shaper or an EKF window longer than it holds at the exit of initialisation), and what it cannot design
+in C (another kind, n > 62) when it is built.
 Its closed loop is tests/test_tracked_cosim.py; the twin contract tests/test_native_twin_contract.py."""
 
 import math

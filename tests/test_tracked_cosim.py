@@ -94,7 +94,8 @@ def test_300_g_put_on_mid_print_is_recovered_within_three_moves(tmp_path, build)
     """Three moves on the empty bed, its guess right, then 300 g on it (30 -> 26.3 Hz) during a rest:
     the move after the change is shaped for the old mode (8.1 %), the EKF learns the new one from its
     ring, and the next move leaves 0.12 %: recovered in one move, the issue asks for three (the design
-    layer, with accelerometer noise: 7.6 % on the next move, about 1 % on the ones after)."""
+    layer, with accelerometer noise: 7.6 % on the next move, about 1 % on the ones after). The same with the
+    native C TrackedShaper, to the printed digits."""
     moves = 7
     commands = np.concatenate([ONE * (-1) ** i for i in range(moves)])
     loads = np.where(np.arange(commands.size) < 3 * ONE.size - 100, 0.0, 300.0)
