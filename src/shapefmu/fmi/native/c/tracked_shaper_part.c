@@ -12,7 +12,9 @@
  *
  * Feed-through: y, f and zeta at a sample depend on both inputs there. As the pythonfmu FMU does,
  * the outputs are those of the current sample run on a copy of the kernel (the probe), which the
- * step then takes for real; the copy is made again only when an input changed or a step was taken.
+ * step then takes for real. The copy costs the EKF's window and the shaper's ring (a period and half
+ * a period of the mode, in samples), so it is made only when the outputs are read after an input
+ * changed or a step was taken: once per step for a host that sets, reads and steps.
  * Every parameter is used at the exit of initialisation, so each may be set before it.
  */
 #include <math.h>
@@ -41,7 +43,7 @@ typedef struct {
 
 typedef struct {
     Kernel kernel, probe;
-    long long started, dirty, failed;  /* dirty: an input changed since the probe */
+    long long started, dirty, failed;  /* dirty: an input changed or a step was taken since the probe */
     SampleClock clock;
     size_t vr[TRACK_MEANINGS];
     ModelInstance *inst;
@@ -147,7 +149,8 @@ static ModelStatus do_step(ModelInstance *inst, double t_now, double h, const ch
     const double inputs[2] = {real_of(inst, TRACK_COMMAND), real_of(inst, TRACK_MEASUREMENT)};
     clock_take(&t->clock, &step, inputs, 2, commit, t);
     if (t->failed) return model_fail(inst, "%s: at t = %g s: %s", function, t_now, t->kernel.shaper.failure);
-    return preview(inst, function);
+    t->dirty = 1;  /* the outputs of the sample now current, made when they are read (update) */
+    return MODEL_OK;
 }
 
 /* ---------------------------------------------------------------- life cycle */
