@@ -113,6 +113,11 @@ static long long wrapped(long long i, long long w) { return i >= w ? i - w : i; 
 static void window_push(Ekf *e, EkfHistory *history, double omega, double sigma) {
     const long long w = e->window, slot = e->slot;
     const int full = e->count == w;
+    EkfJournal *journal = history->journal;
+    if (journal != NULL) {
+        journal->pushed = 1, journal->slot = slot;
+        journal->recent[0] = history->recent[2 * slot], journal->recent[1] = history->recent[2 * slot + 1];
+    }
     history->recent[2 * slot] = omega;
     history->recent[2 * slot + 1] = sigma;
     for (int k = 0; k < EKF_QUEUES; k++) {
@@ -126,7 +131,9 @@ static void window_push(Ekf *e, EkfHistory *history, double omega, double sigma)
             if (high ? back <= value : back >= value) queue->size--;
             else break;
         }
-        at[wrapped(queue->front + queue->size, w)] = slot;
+        const long long tail = wrapped(queue->front + queue->size, w);
+        if (journal != NULL) journal->at[k] = k * w + tail, journal->was[k] = at[tail];
+        at[tail] = slot;
         queue->size++;
     }
     e->slot = wrapped(slot + 1, w);
@@ -146,6 +153,7 @@ static int steady(const Ekf *e, const EkfHistory *history, int state, int high, 
 }
 
 int ekf_step(Ekf *e, EkfHistory *history, double z) {
+    if (history->journal != NULL) history->journal->pushed = 0;
     e->samples++;
     ekf_predict(e);
     const int measured = isfinite(z);
@@ -171,6 +179,16 @@ int ekf_step(Ekf *e, EkfHistory *history, double z) {
     e->sigma_converged = steady(e, history, 3, HIGH_SIGMA, LOW_SIGMA, e->sigma_tol);
     e->converged = e->omega_converged && e->sigma_converged;
     return measured && !e->reset_last;
+}
+
+void ekf_take_back(Ekf *e, EkfHistory *history, const Ekf *before) {
+    const EkfJournal *journal = history->journal;
+    if (journal->pushed) {
+        for (int k = 0; k < EKF_QUEUES; k++) history->queued[journal->at[k]] = journal->was[k];
+        history->recent[2 * journal->slot] = journal->recent[0];
+        history->recent[2 * journal->slot + 1] = journal->recent[1];
+    }
+    *e = *before;
 }
 
 static int flag(long long value) { return value == 0 || value == 1; }

@@ -29,9 +29,17 @@ typedef struct {
     EkfQueue queue[EKF_QUEUES];
 } Ekf;
 
+/* What one ekf_step overwrote in the history, so that ekf_take_back can undo it. */
+typedef struct {
+    int pushed;                                     /* the step pushed an estimate */
+    long long slot, at[EKF_QUEUES], was[EKF_QUEUES];  /* queued[at[k]] held was[k] */
+    double recent[2];                               /* what recent[2 slot], recent[2 slot + 1] held */
+} EkfJournal;
+
 typedef struct {
     double *recent;      /* 2 * window: (omega, sigma) per slot */
     long long *queued;   /* EKF_QUEUES * window */
+    EkfJournal *journal; /* NULL, or where ekf_step notes what it overwrites */
 } EkfHistory;
 
 /* A filter at rest at the guess omega0 (rad/s) for samples at fs (Hz), tuned for a signal of
@@ -49,6 +57,9 @@ int ekf_step(Ekf *e, EkfHistory *history, double z);
 /* Whether e (its window's history is rebuilt by ekf_rebuild_history) is a filter a run reaches, as
  * far as its sizes, flags and the finiteness of its estimates go: what an FMU state restoring it must hold. */
 int ekf_valid(const Ekf *e);
+/* Undo the one ekf_step journalled in history->journal: the history's entries back, and *e = *before
+ * (the filter as it was before that step). */
+void ekf_take_back(Ekf *e, EkfHistory *history, const Ekf *before);
 /* ResonanceEKF.restart_phasor: a new ring begins; omega and sigma keep what they learnt. */
 void ekf_restart_phasor(Ekf *e);
 /* The undamped natural frequency hypot(omega_d, sigma), rad/s. */

@@ -12,8 +12,9 @@
  *
  * Feed-through: y, f and zeta at a sample depend on both inputs there. As the pythonfmu FMU does,
  * the outputs are those of the current sample run on a copy of the kernel (the probe), which the
- * step then takes for real. The copy costs the EKF's window and the shaper's ring (a period and half
- * a period of the mode, in samples), so it is made only when the outputs are read after an input
+ * step then takes for real. The probe shares the EKF's window with the kernel (its step is
+ * journalled and taken back: resonance_ekf.c's ekf_take_back) and copies the shaper's ring of past
+ * commands (half a period of the mode, in samples), only when the outputs are read after an input
  * changed or a step was taken: once per step for a host that sets, reads and steps.
  * Every parameter is used at the exit of initialisation, so each may be set before it.
  */
@@ -95,17 +96,22 @@ static int history_allocate(Kernel *k, ModelInstance *inst) {
     return k->history.recent != NULL && k->history.queued != NULL ? 0 : -1;
 }
 
-/* dst becomes a copy of src (a probe: the same window, dst's buffers kept): 0, or -1 out of memory. */
-static int kernel_copy(Kernel *dst, const Kernel *src, ModelInstance *inst) {
-    const EkfHistory history = dst->history;
-    const ModeFollowing shaper = dst->shaper;
-    memcpy(dst, src, sizeof *dst);
-    dst->history = history;
-    memcpy(&dst->shaper, &shaper, sizeof shaper);
-    if (dst->history.recent == NULL && history_allocate(dst, inst) != 0) return -1;
-    memcpy(dst->history.recent, src->history.recent, 2 * (size_t)src->ekf.window * sizeof(double));
-    memcpy(dst->history.queued, src->history.queued, EKF_QUEUES * (size_t)src->ekf.window * sizeof(long long));
-    return mf_copy(&dst->shaper, &src->shaper, inst);
+/* The probe becomes the kernel but for the EKF's window, which it shares: a step of the probe is
+ * journalled there (history.journal) and taken back (probe_end). 0, or -1 out of memory. */
+static int probe_start(Kernel *probe, const Kernel *k, ModelInstance *inst, EkfJournal *journal) {
+    const ModeFollowing shaper = probe->shaper;
+    memcpy(probe, k, sizeof *probe);
+    memcpy(&probe->shaper, &shaper, sizeof shaper);
+    probe->history.journal = journal;
+    return mf_copy(&probe->shaper, &k->shaper, inst);
+}
+
+/* The kernel's window as it was before the probe's step, and the probe holding none of it. */
+static void probe_end(Kernel *probe, const Kernel *k) {
+    ekf_take_back(&probe->ekf, &probe->history, &k->ekf);
+    probe->history.recent = NULL;
+    probe->history.queued = NULL;
+    probe->history.journal = NULL;
 }
 
 /* ---------------------------------------------------------------- samples and outputs */
@@ -124,10 +130,12 @@ static ModelStatus preview(ModelInstance *inst, const char *function) {
     const double open[2] = {real_of(inst, TRACK_COMMAND), real_of(inst, TRACK_MEASUREMENT)};
     const double *inputs = t->clock.latched ? t->clock.v : open;
     double y;
-    if (kernel_copy(&t->probe, &t->kernel, inst) != 0)
-        return model_fail(inst, "%s: out of memory for a copy of the kernel", function);
-    if (kernel_step(&t->probe, inst, inputs[0], inputs[1], &y) != 0)
-        return model_fail(inst, "%s: %s", function, t->probe.shaper.failure);
+    EkfJournal journal = {0};
+    const int copied = probe_start(&t->probe, &t->kernel, inst, &journal) == 0;
+    const int failed = !copied || kernel_step(&t->probe, inst, inputs[0], inputs[1], &y) != 0;
+    probe_end(&t->probe, &t->kernel);
+    if (!copied) return model_fail(inst, "%s: out of memory for a copy of the shaper", function);
+    if (failed) return model_fail(inst, "%s: %s", function, t->probe.shaper.failure);
     inst->reals[t->vr[TRACK_OUTPUT]] = y;
     inst->reals[t->vr[TRACK_FREQUENCY]] = t->probe.mode[0] / (2.0 * PI);
     inst->reals[t->vr[TRACK_DAMPING]] = t->probe.mode[1];
