@@ -43,6 +43,7 @@ TWINS = {
     "STOSController 2.0": ("STOSController", "2.0", False, {}),
     "ProfileGenerator 3.0 clock": ("ProfileGenerator", "3.0", True, {"t_start": -1.0}),
     "ReferencePlayer 2.0": ("ReferencePlayer", "2.0", False, {}),
+    "ScheduledShaper 3.0 clock": ("ScheduledShaper", "3.0", True, {}),
     "Shaper pythonfmu": ("Shaper", "pythonfmu", False, SHAPER),
 }
 

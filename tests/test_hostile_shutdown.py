@@ -23,7 +23,7 @@ from support.run_watch import OutputWatch
 SPECTRUM = Path(__file__).resolve().parent / "data" / "recordings" / "v24_resonances_x_20230306_224517.csv"
 
 
-@pytest.mark.parametrize("words", ["mode(s), transmitted response", "pick (fmu):", "wrote o.fmu"],
+@pytest.mark.parametrize("words", ["mode(s), sweep excitation", "pick (fmu):", "wrote o.fmu"],
                          ids=["scanning", "building", "exiting"])
 def test_sigterm_at_the_run_s_progress_ends_it_cleanly(tmp_path, words):
     process = subprocess.Popen([sys.executable, "-X", "faulthandler", "-m", "shapefmu", "recommend", str(SPECTRUM),

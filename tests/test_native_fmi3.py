@@ -42,6 +42,7 @@ CASES = {
     "stos controller": ("STOSController", {}, STOP),
     "reference player": ("ReferencePlayer", {}, STOP),
     "profile generator": ("ProfileGenerator", {}, STOP),
+    "scheduled shaper": ("ScheduledShaper", {}, STOP),
 }
 # Set in initialisation on both: FMI 2.0 by element, FMI 3.0 as the array (its other elements as built).
 ARRAY_SETS = {"shaper zvd": ("f", 1, 14.5), "impulse train": ("impulse_time", 2, 0.0131),

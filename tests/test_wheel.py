@@ -31,8 +31,10 @@ from pathlib import Path
 import pytest
 
 from shapefmu.cli.extras import EXTRAS
+from shapefmu.fmi.kinds import KINDS
 
 ROOT = Path(__file__).resolve().parent.parent
+PLANT_MODELS = [p for p in (ROOT / "models").iterdir() if p.suffix in (".toml", ".py")]
 
 
 def _install(folder: Path, artifact: Path) -> Path:
@@ -182,7 +184,8 @@ def test_build_plant_show_and_compare_from_an_empty_folder_print_what_the_checko
     there.mkdir()
     for folder, python in ((here, sys.executable), (there, installed)):
         built = shapefmu(python, "build", cwd=folder)
-        assert len(re.findall(r"^built fmus/\w+\.fmu$", built, re.M)) == 15, built
+        # every FMU kind, every plant model shipped in models/, and the measured disk drive a shipped system runs
+        assert len(re.findall(r"^built fmus/\w+\.fmu$", built, re.M)) == len(KINDS) + len(PLANT_MODELS) + 1, built
     assert sorted(p.name for p in (there / "fmus").iterdir()) == sorted(p.name for p in (here / "fmus").iterdir())
     for arguments in (("plant", "show", "disk_drive"), ("compare", "disk_drive", "--distance", "0.05")):
         assert shapefmu(installed, *arguments, cwd=there) == shapefmu(sys.executable, *arguments, cwd=here)

@@ -88,7 +88,7 @@ typedef void (*Free)(fmi2Component);
 typedef fmi2Status (*Reals)(fmi2Component, const fmi2ValueReference*, size_t, double*);
 typedef fmi2Status (*Step)(fmi2Component, double, double, int);
 
-#define MAX_FMUS 16
+#define MAX_FMUS 32  /* every FMU `shapefmu build` writes, in one process */
 #define MAX_INSTANCES 8
 #define MAX_VRS 64
 

@@ -81,7 +81,6 @@ stos_fmu = pythonfmu_fixture("STOSController", STOS_STARTS)  # the disk drive's 
 SCHEDULED_STARTS = {"n_rows": 2, "values[1]": 0.0, "values[2]": 300.0, "f[1]": 30.0, "f[2]": 30.0 / math.sqrt(1.3),
                     "zeta[1]": 0.05, "zeta[2]": 0.05 / math.sqrt(1.3), "Ts": 5e-4, "resolution": 0.0}
 scheduled_zv_fmu = pythonfmu_fixture("ScheduledShaper", SCHEDULED_STARTS | {"kind": "zv"})
-scheduled_zvd_fmu = pythonfmu_fixture("ScheduledShaper", SCHEDULED_STARTS | {"kind": "zvd"})
 # --- TrackedShaper FMU (fmi/kinds/tracked_shaper.py): the bed's guess 10 % off its 30 Hz, at 2 kHz -----
 tracked_fmu = pythonfmu_fixture("TrackedShaper", {"f0": 33.0, "Ts": 5e-4})
 

@@ -31,7 +31,7 @@ import numpy as np
 import pytest
 
 from shapefmu.fmi.kinds.impulse_train import train_start_values
-from support.fixtures_fmi import EKF_STARTS, STOS_STARTS, time_optimal_solution
+from support.fixtures_fmi import EKF_STARTS, SCHEDULED_STARTS, STOS_STARTS, time_optimal_solution
 from support.fmpy_slaves import initialised, run_points
 from support.scenarios import EKF_OUTPUTS, OMEGA, SETTLE, TARGET, TS, U, ekf_signals, plant_step, recorded_measurements
 
@@ -446,3 +446,78 @@ class ImpulseTrainTwin(Twin):
 
 
 IMPULSE_TRAIN = ImpulseTrainTwin()
+
+
+# ---------------------------------------------------------------------------------- ScheduledShaper
+
+SCHEDULED_TS = 5e-4
+SCHEDULED_CASES = {
+    # the bed of models/printer_bed.toml gaining 300 g (30 -> 26.3 Hz), re-designed at every change
+    "bed zv": SCHEDULED_STARTS | {"kind": "zv"},
+    # a mode that moves with position over [-1, 1]: three rows, re-designed past 0.1 %, from rest at 0.3
+    "position mzv": {"kind": "mzv", "n_rows": 3, "values[1]": -1.0, "values[2]": 0.0, "values[3]": 1.0,
+                     "f[1]": 12.0, "f[2]": 15.0, "f[3]": 20.0, "zeta[1]": 0.02, "zeta[2]": 0.05, "zeta[3]": 0.1,
+                     "resolution": 1e-3, "Ts": 1e-3, "u0": 0.3},
+    # Marlin's linear law f = 30 - 12 value (two rows, extrapolated), three ZVs convolved (zv_dn, n = 2)
+    "law zv_dn": {"kind": "zv_dn", "n": 2, "n_rows": 2, "values[1]": 0.0, "values[2]": 1.0, "f[1]": 30.0,
+                  "f[2]": 18.0, "zeta[1]": 0.03, "zeta[2]": 0.03, "extrapolate": True, "Ts": SCHEDULED_TS},
+}
+SCHEDULING_SPAN = {"bed zv": (0.0, 300.0), "position mzv": (-1.2, 1.2), "law zv_dn": (-0.2, 1.3)}
+
+
+def _moves_through_a_drift(case: str):
+    """Moves of the command (a 2.5 Hz sine clipped at +-1: moves and rests; a 90 Hz ripple from 0.3 s) while
+    the scheduling input drifts across the case's span and back, with a jump at 0.55 s: both inputs as
+    functions of the time, so any steps sample them."""
+    low, high = SCHEDULING_SPAN[case]
+
+    def inputs(pair, times):
+        t = np.asarray(times[:-1])
+        u = np.clip(np.sin(2 * np.pi * 2.5 * t) * 1.5, -1.0, 1.0) + 0.05 * np.sin(2 * np.pi * 90.0 * t) * (t > 0.3)
+        drift = low + (high - low) * (0.5 - 0.5 * np.cos(2 * np.pi * 0.8 * t)) + (high - low) * 0.2 * (t > 0.55)
+        return [{"u": float(a), "scheduling": float(s)} for a, s in zip(u, np.minimum(drift, high))]
+
+    return inputs
+
+
+def _moved_and_shaped(rows) -> None:
+    assert np.ptp(np.asarray(rows)) > 1.0 and len({row[0] for row in rows}) > 100  # it moved, and shaped
+
+
+def _shaped_on_the_platform(rows) -> None:
+    assert rows.shape == (400, 1) and np.ptp(rows) > 0.5 and len(np.unique(rows)) > 150
+
+
+class ScheduledShaperTwin(Twin):
+    """Issue 37's ScheduledShaper: a closed-form shaper re-designed for the mode its scheduling input puts in
+    force, each change of the command shaped by the design in force when it was commanded. The C does the
+    Python's arithmetic operation for operation: bit for bit. Rows are read before and after each step
+    (y feeds through from both inputs)."""
+
+    model = "ScheduledShaper"
+    outputs = ("y",)
+    read_before = True
+    host_step = SCHEDULED_TS
+    steps_of_ts = tuple(Run(case, steps_of(SCHEDULED_CASES[case]["Ts"], 1000), _moves_through_a_drift(case),
+                            check=_moved_and_shaped) for case in SCHEDULED_CASES)
+    hosts = Run("bed zv", steps_of(SCHEDULED_TS, 600), _moves_through_a_drift("bed zv"))
+    random = tuple(Run(case, random_times(12, 1200, lambda rng, n: rng.choice([0.3, 0.5, 1.0, 1.7, 4.0], size=n) * 5e-4,
+                                          9, 1e-13), _moves_through_a_drift(case), check=_moved_and_shaped)
+                   for case in ("bed zv", "position mzv"))
+    changes = (Run("bed zv", steps_of(1e-3, 700), _moves_through_a_drift("bed zv"), check=_moved_and_shaped,
+                   parameters={"kind": "zvd", "Ts": 1e-3, "f[2]": 24.0, "resolution": 1e-3, "u0": 0.2}),
+               Run("law zv_dn", steps_of(SCHEDULED_TS, 700), _moves_through_a_drift("law zv_dn"),
+                   check=_moved_and_shaped, parameters={"kind": "mzv", "f[2]": 22.0, "zeta[2]": 0.05}))
+    # the host's two inputs (sines a radian apart, a square on top): both the command and the position move
+    c_host = CHost("position mzv", ("--random", 4, 1e-9, 2.5e-3, 3000, 1e-3, "--period", 0.35, "--square", 0.5),
+                   lambda rows: np.ptp(rows[:, 3]) > 1.0)
+    # the position held between rows (libm's sqrt, exp and pow of each platform), the command driven
+    platforms = (Platforms("position mzv", lambda vr: f"real {vr['scheduling']} 0.37\ninput {vr['u']} 1\n"
+                           f"output {vr['y']}\nrun 400 0.001\n", _shaped_on_the_platform),)
+    valgrind = ("bed zv", "valgrind_scheduled")
+
+    def starts(self, case):
+        return SCHEDULED_CASES[case]
+
+
+SCHEDULED_SHAPER = ScheduledShaperTwin()

@@ -344,6 +344,9 @@ TARGETS = {
     "profile": ("the ProfileGenerator FMU: twin-pulse, time-frequency or shaped bang-bang moves",
                 *_parameter_target("ProfileGenerator", "ProfileGenerator"),
                 ("shapefmu build profile --param profile=TP -o fmus/ProfileGenerator.fmu",)),
+    "scheduled-shaper": ("the ScheduledShaper FMU (issue 37): re-designed for the mode a scheduling input puts in force",
+                         *_parameter_target("ScheduledShaper", "ScheduledShaper"),
+                         ("shapefmu build scheduled-shaper --native --param kind=zvd -o fmus/ScheduledShaper.fmu",)),
     "tracked-shaper": ("the TrackedShaper FMU (issue 37): a shaper the EKF of paper 001 keeps on a moving mode",
                        *_parameter_target("TrackedShaper", "TrackedShaper"),
                        ("shapefmu build tracked-shaper --native --param f0=27 --param Ts=1e-3 "

@@ -4,8 +4,8 @@ the machine at several values of a scheduling input (issue 37: a bed with 100 g,
 Each recording gives the row of its value: its dominant mode (the highest peak of its spectrum among the
 modes ``identify`` finds), the rows sorted by value. The table is printed (``--json``: as JSON on
 stdout), with the start values of a ScheduledShaper FMU (``fmi/kinds/scheduled_shaper.py``), which
-``--build OUT.fmu`` writes (pythonfmu; the kind has no native twin yet). The shaper holds the end rows
-beyond the table and is linear in the value between rows.
+``--build OUT.fmu`` writes (pythonfmu; ``shapefmu build scheduled-shaper --native --param ...`` builds its
+native twin). The shaper holds the end rows beyond the table and is linear in the value between rows.
 """
 
 from __future__ import annotations

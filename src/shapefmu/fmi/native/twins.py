@@ -20,6 +20,7 @@ TWINS = {
     "ShapeFilter": ("shapefmu.fmi.native.sampled", "build_native_shape_filter"),
     "EKFTuner": ("shapefmu.fmi.native.ekf_tuner", "build_native_ekf_tuner"),
     "TrackedShaper": ("shapefmu.fmi.native.tracked_shaper", "build_native_tracked_shaper"),
+    "ScheduledShaper": ("shapefmu.fmi.native.scheduled_shaper", "build_native_scheduled_shaper"),
     "STOSController": ("shapefmu.fmi.native.stos", "build_native_stos"),
     "ReferencePlayer": ("shapefmu.fmi.native.reference", "build_native_reference"),
     "ProfileGenerator": ("shapefmu.fmi.native.profiles", "build_native_profile"),

@@ -241,12 +241,8 @@ static ModelStatus exit_initialization(ModelInstance *inst, const char *function
 
 static ModelStatus do_step(ModelInstance *inst, double t_now, double h, const char *function) {
     Tuner *t = tuner_of(inst);
-    const GridStep step = grid_step(&t->clock.at, t->clock.ts, t_now, h);
-    if (step.count > (double)MAX_SAMPLES_PER_STEP)
-        return model_fail(inst, "%s: communication step h = %g s spans %.0f samples of Ts = %g s; at most %lld "
-                         "per step", function, h, step.count, t->clock.ts, MAX_SAMPLES_PER_STEP);
     const double inputs[2] = {real_of(inst, EKF_COMMAND), real_of(inst, EKF_VIBRATION)};
-    clock_take(&t->clock, &step, inputs, 2, commit, t);
+    if (twin_clock_step(inst, &t->clock, t_now, h, inputs, 2, commit, t, function) != MODEL_OK) return MODEL_ERROR;
     if (t->failure != NULL) return model_fail(inst, "%s: at t = %g s: %s", function, t_now, t->failure);
     publish_estimates(inst);
     return MODEL_OK;
@@ -254,18 +250,12 @@ static ModelStatus do_step(ModelInstance *inst, double t_now, double h, const ch
 
 /* ---------------------------------------------------------------- the part's hooks: values */
 
-static ModelStatus range(ModelInstance *inst, const char *name, double value, int ok, const char *valid,
-                        const char *function) {
-    if (ok && isfinite(value)) return MODEL_OK;
-    return model_fail(inst, "%s: %s must be %s, got %g", function, name, valid, value);
-}
-
 static ModelStatus check_real(ModelInstance *inst, size_t vr, double value, const char *function) {
     const VariableRow *v = &ekf_tuner_model.rows[vr];
     switch (v->meaning) {
     case EKF_PERIOD: case EKF_OMEGA0: case EKF_AMPLITUDE: case EKF_RETUNE:
-        return range(inst, v->name, value, value > 0.0, "> 0", function);
-    default: return range(inst, v->name, value, 1, "finite", function);
+        return twin_range(inst, v->name, value, value > 0.0, "> 0", function);
+    default: return twin_range(inst, v->name, value, 1, "finite", function);
     }
 }
 

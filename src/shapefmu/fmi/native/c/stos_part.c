@@ -174,12 +174,8 @@ static ModelStatus update(ModelInstance *inst, const char *function) {
 
 static ModelStatus do_step(ModelInstance *inst, double t, double h, const char *function) {
     Controller *c = controller_of(inst);
-    const GridStep step = grid_step(&c->clock.at, c->clock.ts, t, h);
-    if (step.count > (double)MAX_SAMPLES_PER_STEP)
-        return model_fail(inst, "%s: communication step h = %g s spans %.0f samples of Ts = %g s; at most %lld "
-                         "per step", function, h, step.count, c->clock.ts, MAX_SAMPLES_PER_STEP);
     const double inputs[3] = {real_of(inst, STOS_TARGET), real_of(inst, STOS_POSITION), real_of(inst, STOS_VELOCITY)};
-    clock_take(&c->clock, &step, inputs, 3, commit, c);
+    if (twin_clock_step(inst, &c->clock, t, h, inputs, 3, commit, c, function) != MODEL_OK) return MODEL_ERROR;
     preview(inst);
     return MODEL_OK;
 }
