@@ -150,12 +150,8 @@ static ModelStatus update(ModelInstance *inst, const char *function) {
 
 static ModelStatus do_step(ModelInstance *inst, double t_now, double h, const char *function) {
     Tracked *t = tracked_of(inst);
-    const GridStep step = grid_step(&t->clock.at, t->clock.ts, t_now, h);
-    if (step.count > (double)MAX_SAMPLES_PER_STEP)
-        return model_fail(inst, "%s: communication step h = %g s spans %.0f samples of Ts = %g s; at most %lld "
-                          "per step", function, h, step.count, t->clock.ts, MAX_SAMPLES_PER_STEP);
     const double inputs[2] = {real_of(inst, TRACK_COMMAND), real_of(inst, TRACK_MEASUREMENT)};
-    clock_take(&t->clock, &step, inputs, 2, commit, t);
+    if (twin_clock_step(inst, &t->clock, t_now, h, inputs, 2, commit, t, function) != MODEL_OK) return MODEL_ERROR;
     if (t->failed) return model_fail(inst, "%s: at t = %g s: %s", function, t_now, t->kernel.shaper.failure);
     t->dirty = 1;  /* the outputs of the sample now current, made when they are read (update) */
     return MODEL_OK;
@@ -263,9 +259,7 @@ static ModelStatus check_real(ModelInstance *inst, size_t vr, double value, cons
     case TRACK_RESOLUTION: valid = value >= 0.0 ? NULL : ">= 0"; break;
     default: break;
     }
-    if (!isfinite(value)) valid = "finite";
-    if (valid == NULL) return MODEL_OK;
-    return model_fail(inst, "%s: %s must be %s, got %g", function, v->name, valid, value);
+    return twin_range(inst, v->name, value, valid == NULL, valid == NULL ? "finite" : valid, function);
 }
 
 static ModelStatus check_integer(ModelInstance *inst, size_t vr, int value, const char *function) {
