@@ -25,6 +25,7 @@ from shapefmu.fmi.description import ModelDescription, fmi3, now, write
 from shapefmu.fmi.documentation import add_documentation
 from shapefmu.fmi.kinds import designed
 from shapefmu.fmi.native.compile import build_binaries, build_description, copy_c_files, write_layer, zip_fmu
+from shapefmu.runtime.shaper_designs import CLOSED_FORM
 
 MODEL_SOURCE = "model.c"
 TYPE_ORDER = ("Real", "Integer", "Boolean", "String")
@@ -83,6 +84,16 @@ def twin_variables_c(table: str, variables, values: dict, meaning_of, guid: str)
     """C of the VariableTable ``table`` of a twin's model part (``c/model.h``, ``c/twin_variables.h``)."""
     return (f"static const VariableRow {table}_rows[] = {{\n{variable_rows(variables, values, meaning_of)}\n}};\n\n"
             f"const VariableTable {table} = {{{table_fields(variables, guid)}, {table}_rows}};\n")
+
+
+def closed_form_only(name: str, values: dict, max_order: int = 62) -> None:
+    """Refuse the start ``values`` of a twin ``name`` that re-designs in C while it runs: its ``kind``
+    must be one c/shaper_designs.c designs in closed form, its ``n`` at most ``max_order`` (64 impulses)."""
+    if values["kind"] not in CLOSED_FORM:
+        raise ValueError(f"kind must be one of {', '.join(CLOSED_FORM)} for the native {name} (it re-designs in C, in "
+                         f"closed form), got {values['kind']!r}; the pythonfmu {name} takes every kind")
+    if values["n"] > max_order:
+        raise ValueError(f"n must be an integer in [0, {max_order}] for the native {name}, got {values['n']}")
 
 
 def write_table_twin(name: str, out_path, designed, header: str, table: str, meanings: dict, sources, headers,

@@ -18,8 +18,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from shapefmu.fmi.native.kernel_fmu import designed_twin, write_table_twin
-from shapefmu.runtime.shaper_designs import CLOSED_FORM
+from shapefmu.fmi.native.kernel_fmu import closed_form_only, designed_twin, write_table_twin
 
 NAME = "TrackedShaper"
 SOURCES = ("tracked_shaper_part.c", "mode_following.c", "resonance_ekf.c", "sample_clock.c", "shaper_designs.c",
@@ -42,10 +41,6 @@ NATIVE_NOTE = ("This FMU is the native C twin of the pythonfmu TrackedShaper: th
 def build_native_tracked_shaper(out_path, *, fmi_version: str = "2.0", clock: bool = False, **start_values) -> Path:
     """Build the native TrackedShaper FMU with ``start_values`` (parameters of the pythonfmu TrackedShaper)."""
     model, variables, values = designed_twin(NAME, start_values)
-    if values["kind"] not in CLOSED_FORM:
-        raise ValueError(f"kind must be one of {', '.join(CLOSED_FORM)} for the native TrackedShaper (it re-designs "
-                         f"in closed form in C), got {values['kind']!r}")
-    if values["n"] > MAX_ORDER:
-        raise ValueError(f"n must be an integer in [0, {MAX_ORDER}] for the native TrackedShaper, got {values['n']}")
+    closed_form_only(NAME, values, MAX_ORDER)
     return write_table_twin(NAME, out_path, (model, variables, values), "tracked_shaper_model.h", "tracked_shaper_model",
                             MEANINGS, SOURCES, HEADERS, NATIVE_NOTE, fmi_version=fmi_version, clock=clock)
