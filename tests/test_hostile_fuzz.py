@@ -39,6 +39,7 @@ TWINS = {
     "ShapeFilter 3.0": ("ShapeFilter", "3.0", False, {"kind": "hanning", "f": 10.0 / math.sqrt(1 - 0.05**2),
                                                        "zeta": 0.05, "Ts": 1e-3}),
     "EKFTuner 3.0 clock": ("EKFTuner", "3.0", True, {}),
+    "TrackedShaper 3.0 clock": ("TrackedShaper", "3.0", True, {}),
     "STOSController 2.0": ("STOSController", "2.0", False, {}),
     "ProfileGenerator 3.0 clock": ("ProfileGenerator", "3.0", True, {"t_start": -1.0}),
     "ReferencePlayer 2.0": ("ReferencePlayer", "2.0", False, {}),

@@ -38,6 +38,7 @@ CASES = {
     "filter hanning2": ("ShapeFilter", FILTERS["hanning2"], STOP),
     "filter TP:BC": ("ShapeFilter", FILTERS["TP:BC"], STOP),
     "ekf tuner": ("EKFTuner", {}, STOP),
+    "tracked shaper": ("TrackedShaper", {}, STOP),
     "stos controller": ("STOSController", {}, STOP),
     "reference player": ("ReferencePlayer", {}, STOP),
     "profile generator": ("ProfileGenerator", {}, STOP),

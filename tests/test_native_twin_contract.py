@@ -22,6 +22,7 @@ from support.c_hosts import fmu_arguments, host_rows, run_host
 from support.fmpy_slaves import replayed_run, run_points
 from support.hosts import run_ecos, run_fmpy, run_libcosim
 from support.declarations import declared
+from support.tracked_shaper_twin import TRACKED_SHAPER
 from support.twins import EKF_TUNER, IMPULSE_TRAIN, PROFILE_GENERATOR, REFERENCE_PLAYER, SCHEDULED_SHAPER, STOS_CONTROLLER
 from support.valgrind import requires_valgrind, run_driver_under_valgrind
 
@@ -32,6 +33,7 @@ TWINS = [
     REFERENCE_PLAYER,
     IMPULSE_TRAIN,
     SCHEDULED_SHAPER,
+    TRACKED_SHAPER,
 ]
 
 

@@ -69,4 +69,50 @@ static int restore_serialised(fmi2Component c, fmi2FMUstate *state) {
     return 0;
 }
 
+/* What a driver of a sampled twin with two inputs and two outputs runs (run_steps, two_by_two_run). */
+typedef struct {
+    const char *in[2], *out[2];
+    void (*inputs)(double t, double values[2]);  /* the inputs at t */
+    int read_before;                              /* outputs also read before each step (feed-through) */
+} TwoByTwo;
+
+/* Steps of 1 ms, 0.25 ms, 1e-16 s, 3 ms, 0.75 ms and 1 ms in turn from *t, the inputs set before each
+ * and the outputs read into out after it. */
+static int run_steps(fmi2Component c, const TwoByTwo *plan, double *t, int steps, double *out) {
+    static const double sizes[] = {1e-3, 2.5e-4, 1e-16, 3e-3, 7.5e-4, 1e-3};
+    const fmi2ValueReference in[2] = {vr_of(plan->in[0]), vr_of(plan->in[1])};
+    const fmi2ValueReference y[2] = {vr_of(plan->out[0]), vr_of(plan->out[1])};
+    for (int k = 0; k < steps; k++) {
+        double values[2];
+        plan->inputs(*t, values);
+        CHECK(fmi2SetReal(c, in, 2, values));
+        if (plan->read_before) CHECK(fmi2GetReal(c, y, 2, out));
+        CHECK(fmi2DoStep(c, *t, sizes[k % 6], fmi2True));
+        *t += sizes[k % 6];
+        CHECK(fmi2GetReal(c, y, 2, out));
+    }
+    return 0;
+}
+
+/* The initialised instance c through a driver's run: `first` steps of run_steps, its FMU state taken,
+ * `second` steps more, check(out) (0: it did what it should), the state's serialised round trip,
+ * refuse_then_restart with the Real `refused`, `last` steps from t = 0.5, fmi2Terminate and
+ * fmi2FreeInstance; prints "ok" and the outputs. */
+static int two_by_two_run(fmi2Component c, const TwoByTwo *plan, int first, int second, int (*check)(const double *out),
+                          const char *refused, int last) {
+    double out[2] = {0.0, 0.0}, t = 0.0;
+    if (run_steps(c, plan, &t, first, out)) return 1;
+    fmi2FMUstate state = NULL;
+    CHECK(fmi2GetFMUstate(c, &state));
+    if (run_steps(c, plan, &t, second, out) || check(out)) return 1;
+    if (restore_serialised(c, &state)) return 1;
+    if (refuse_then_restart(c, t, 2e7, vr_of(refused))) return 1;
+    t = 0.5;
+    if (run_steps(c, plan, &t, last, out)) return 1;
+    CHECK(fmi2Terminate(c));
+    fmi2FreeInstance(c);
+    printf("ok %g %g\n", out[0], out[1]);
+    return 0;
+}
+
 #endif

@@ -7,6 +7,7 @@
     shapefmu build shape-filter --kind hanning --mode 10:0.05 --order 2 [--ts S] -o fmus/HanningFilter.fmu
     shapefmu build ekf-tuner [--kind zvd] [--f0 HZ | --omega0 RAD_S] [--ts S] [--amplitude A] [--retune-fraction F] -o ...
     shapefmu build stos-controller [--param NAME=VALUE ...] -o ...; shapefmu build profile [--param ...] -o ...
+    shapefmu build tracked-shaper [--param ...] -o ...
         (any parameter of the FMU, typed as the FMU declares it, e.g. --param kind=zvd --param f[1]=40)
     shapefmu build shaper --native ...; shape-filter --native; ekf-tuner --native; build --native (every
         FMU that has one): the native C twin (no Python on the host; linux64, win64 and aarch64-linux
@@ -346,6 +347,10 @@ TARGETS = {
     "scheduled-shaper": ("the ScheduledShaper FMU (issue 37): re-designed for the mode a scheduling input puts in force",
                          *_parameter_target("ScheduledShaper", "ScheduledShaper"),
                          ("shapefmu build scheduled-shaper --native --param kind=zvd -o fmus/ScheduledShaper.fmu",)),
+    "tracked-shaper": ("the TrackedShaper FMU (issue 37): a shaper the EKF of paper 001 keeps on a moving mode",
+                       *_parameter_target("TrackedShaper", "TrackedShaper"),
+                       ("shapefmu build tracked-shaper --native --param f0=27 --param Ts=1e-3 "
+                        "-o fmus/TrackedShaper.fmu",)),
 }
 
 

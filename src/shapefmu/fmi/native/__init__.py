@@ -1,8 +1,8 @@
 """Native C FMUs: the generic FMI layers (``c/``), the plant-FMU generator and the native C
 twins of the FMU kinds (``twins``: the Shaper and ShapeFilter of ``sampled``, the EKF tuner of
 ``ekf_tuner``, the STOS controller of ``stos``, the profile generator of ``profiles``, the
-reference player of ``reference`` and the ScheduledShaper of ``scheduled_shaper``, each packaged by
-``kernel_fmu``).
+reference player of ``reference``, the ScheduledShaper of ``scheduled_shaper`` and the
+TrackedShaper of ``tracked_shaper``, each packaged by ``kernel_fmu``).
 
 It may import the design layer (``shapefmu.plants``) and CasADi for code generation; the C it
 emits and compiles needs nothing but a C compiler. The generator writes FMI 2.0 Model Exchange +

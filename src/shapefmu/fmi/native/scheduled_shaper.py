@@ -16,8 +16,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from shapefmu.fmi.native.kernel_fmu import designed_twin, twin_variables_c, write_native_fmu
-from shapefmu.runtime.shaper_designs import CLOSED_FORM
+from shapefmu.fmi.native.kernel_fmu import closed_form_only, designed_twin, twin_variables_c, write_native_fmu
 
 NAME = "ScheduledShaper"
 SOURCES = ("scheduled_part.c", "sample_clock.c", "shaper_designs.c", "twin_variables.c")
@@ -41,11 +40,7 @@ def _meaning(name: str) -> str:
 def build_native_scheduled_shaper(out_path, *, fmi_version: str = "2.0", clock: bool = False, **start_values) -> Path:
     """Build the native ScheduledShaper FMU with ``start_values`` (parameters of the pythonfmu ScheduledShaper)."""
     model, variables, values = designed_twin(NAME, start_values)
-    if values["kind"] not in CLOSED_FORM:
-        raise ValueError(f"kind must be one of {', '.join(CLOSED_FORM)} for the native ScheduledShaper (it re-designs "
-                         f"in C, in closed form), got {values['kind']!r}; the pythonfmu ScheduledShaper takes every kind")
-    if values["n"] > MAX_ORDER:
-        raise ValueError(f"n must be an integer in [0, {MAX_ORDER}] for the native ScheduledShaper, got {values['n']}")
+    closed_form_only(NAME, values, MAX_ORDER)
     if {v.name.partition("[")[0] for v in variables} != set(MEANINGS):
         raise RuntimeError(f"the ScheduledShaper's variables {[v.name for v in variables]} are not those "
                            f"c/scheduled_model.h knows: {list(MEANINGS)}")

@@ -19,6 +19,7 @@ TWINS = {
     "ImpulseTrain": ("shapefmu.fmi.native.sampled", "build_native_impulse_train"),
     "ShapeFilter": ("shapefmu.fmi.native.sampled", "build_native_shape_filter"),
     "EKFTuner": ("shapefmu.fmi.native.ekf_tuner", "build_native_ekf_tuner"),
+    "TrackedShaper": ("shapefmu.fmi.native.tracked_shaper", "build_native_tracked_shaper"),
     "ScheduledShaper": ("shapefmu.fmi.native.scheduled_shaper", "build_native_scheduled_shaper"),
     "STOSController": ("shapefmu.fmi.native.stos", "build_native_stos"),
     "ReferencePlayer": ("shapefmu.fmi.native.reference", "build_native_reference"),

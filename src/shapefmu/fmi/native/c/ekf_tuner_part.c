@@ -353,8 +353,7 @@ static int restore_state(ModelInstance *inst, const unsigned char *bytes, size_t
     release_run(inst);
     if (!header.started) return size == sizeof header ? 0 : -1;
     const long long window = header.ekf.window;
-    if (window < 2 || window > EKF_MAX_WINDOW || header.ekf.count < 0 || header.ekf.count > window
-        || header.ekf.slot < 0 || header.ekf.slot >= window || (header.ekf.converged != 0 && header.ekf.converged != 1) || header.kind < 0 || header.kind >= KIND_NOT_CLOSED_FORM || header.order < 0
+    if (!ekf_valid(&header.ekf) || header.kind < 0 || header.kind >= KIND_NOT_CLOSED_FORM || header.order < 0
         || header.order > MAX_ORDER || !clock_valid(&header.clock, 2) || !(header.h > 0.0))
         return -1;
     const unsigned char *at = bytes + sizeof header, *end = bytes + size;

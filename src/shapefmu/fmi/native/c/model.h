@@ -1,7 +1,7 @@
 /* The contract between the generic FMI layers (FMI 2.0: fmi2_layer*.c, FMI 3.0: fmi3_layer*.c, both
  * over the version-neutral layer_core.c and layer_state.c) and a model part (the plants' plant_part.c,
  * the sampled filters' sampled_part.c, the twins' ekf_tuner_part.c, stos_part.c, motion_part.c,
- * table_part.c and scheduled_part.c), in no version's names.
+ * table_part.c, scheduled_part.c and tracked_shaper_part.c), in no version's names.
  *
  * As in the FMI Reference FMUs, a layer owns everything FMI: instances and the host's memory
  * callbacks, the state machine (FMI 2.0.x sections 3.2.3 and 4.2.4; FMI 3.0 section 2.3), logging,

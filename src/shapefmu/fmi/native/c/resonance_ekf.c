@@ -1,7 +1,7 @@
 /* The 4-state resonance EKF of paper 001, eqs. (15)-(26): runtime/ekf.py's ResonanceEKF in C,
  * operation for operation (its module docstring derives the OCR corrections), for the native EKF
- * tuner (ekf_tuner_part.c). The reference phase is 0 (H = [1, 0, 0, 0]) and the tuning is
- * runtime/ekf.py's default_tuning. */
+ * tuner (ekf_tuner_part.c, runtime/ekf.py's default_tuning) and the native tracked shaper
+ * (tracked_shaper_part.c, its own tuning). The reference phase is 0 (H = [1, 0, 0, 0]). */
 #include <math.h>
 #include <string.h>
 
@@ -9,8 +9,6 @@
 
 #define PI 3.14159265358979323846
 /* runtime/ekf.py's default_tuning fractions and ResonanceEKF defaults */
-#define P0_OMEGA 0.25
-#define P0_SIGMA 0.1
 #define Q_PHASOR 1e-3
 #define Q_OMEGA_PER_PERIOD 1e-4
 #define Q_SIGMA_PER_PERIOD 1e-5
@@ -25,21 +23,26 @@ static void diagonal(double P[4][4], const double *variances) {
 }
 
 void ekf_start(Ekf *e, double fs, double omega0, double amplitude, long long window) {
-    memset(e, 0, sizeof *e);
-    e->fs = fs;
     const double samples_per_period = 2.0 * PI * fs / omega0;
     const double q_omega = pow(Q_OMEGA_PER_PERIOD * omega0, 2) / samples_per_period;
     const double q_sigma = pow(Q_SIGMA_PER_PERIOD * omega0, 2) / samples_per_period;
-    const double p0[4] = {pow(amplitude, 2), pow(amplitude, 2), pow(P0_OMEGA * omega0, 2), pow(P0_SIGMA * omega0, 2)};
+    const double p0[4] = {pow(amplitude, 2), pow(amplitude, 2), pow(EKF_P0_OMEGA * omega0, 2), pow(EKF_P0_SIGMA * omega0, 2)};
     const double q[4] = {pow(Q_PHASOR * amplitude, 2), pow(Q_PHASOR * amplitude, 2), q_omega, q_sigma};
-    memcpy(e->p0, p0, sizeof p0);
-    memcpy(e->q, q, sizeof q);
-    e->r = pow(R_AMPLITUDE * amplitude, 2);
-    e->omega_tol = OMEGA_TOL, e->sigma_tol = SIGMA_TOL, e->nis_limit = NIS_LIMIT;
+    ekf_start_tuned(e, fs, omega0, 0.0, p0, q, pow(R_AMPLITUDE * amplitude, 2), OMEGA_TOL, SIGMA_TOL, window);
+}
+
+void ekf_start_tuned(Ekf *e, double fs, double omega0, double sigma0, const double p0[4], const double q[4], double r,
+                     double omega_tol, double sigma_tol, long long window) {
+    memset(e, 0, sizeof *e);
+    e->fs = fs;
+    memcpy(e->p0, p0, sizeof e->p0);
+    memcpy(e->q, q, sizeof e->q);
+    e->r = r;
+    e->omega_tol = omega_tol, e->sigma_tol = sigma_tol, e->nis_limit = NIS_LIMIT;
     e->window = window;
     e->nis = 1.0;
     e->dt = 1.0 / fs;
-    e->x[0] = 0.0, e->x[1] = 0.0, e->x[2] = omega0, e->x[3] = 0.0;
+    e->x[0] = 0.0, e->x[1] = 0.0, e->x[2] = omega0, e->x[3] = sigma0;
     diagonal(e->P, e->p0);
     memcpy(e->good, e->x, sizeof e->x);
 }
@@ -110,6 +113,11 @@ static long long wrapped(long long i, long long w) { return i >= w ? i - w : i; 
 static void window_push(Ekf *e, EkfHistory *history, double omega, double sigma) {
     const long long w = e->window, slot = e->slot;
     const int full = e->count == w;
+    EkfJournal *journal = history->journal;
+    if (journal != NULL) {
+        journal->pushed = 1, journal->slot = slot;
+        journal->recent[0] = history->recent[2 * slot], journal->recent[1] = history->recent[2 * slot + 1];
+    }
     history->recent[2 * slot] = omega;
     history->recent[2 * slot + 1] = sigma;
     for (int k = 0; k < EKF_QUEUES; k++) {
@@ -123,7 +131,9 @@ static void window_push(Ekf *e, EkfHistory *history, double omega, double sigma)
             if (high ? back <= value : back >= value) queue->size--;
             else break;
         }
-        at[wrapped(queue->front + queue->size, w)] = slot;
+        const long long tail = wrapped(queue->front + queue->size, w);
+        if (journal != NULL) journal->at[k] = k * w + tail, journal->was[k] = at[tail];
+        at[tail] = slot;
         queue->size++;
     }
     e->slot = wrapped(slot + 1, w);
@@ -134,21 +144,20 @@ static double extreme(const Ekf *e, const EkfHistory *history, int which) {
     return estimate(history, history->queued[which * e->window + e->queue[which].front], which);
 }
 
-/* Covariance of omega and sigma small and both estimates stable over the last window. */
-static int converged(const Ekf *e, const EkfHistory *history) {
-    const double omega = e->x[2];
-    const double omega_std = sqrt(e->P[2][2] > 0.0 ? e->P[2][2] : 0.0);
-    const double sigma_std = sqrt(e->P[3][3] > 0.0 ? e->P[3][3] : 0.0);
-    if (omega_std > e->omega_tol * omega || sigma_std > e->sigma_tol * omega) return 0;
-    if (e->count < e->window) return 0;
-    return extreme(e, history, HIGH_OMEGA) - extreme(e, history, LOW_OMEGA) <= e->omega_tol * omega
-           && extreme(e, history, HIGH_SIGMA) - extreme(e, history, LOW_SIGMA) <= e->sigma_tol * omega;
+/* runtime/ekf.py's _steady: the standard deviation of the state below tol times omega, and its
+ * estimates steady within that over the last window. */
+static int steady(const Ekf *e, const EkfHistory *history, int state, int high, int low, double tol) {
+    const double bound = tol * e->x[2], variance = e->P[state][state];
+    if (sqrt(variance > 0.0 ? variance : 0.0) > bound || e->count < e->window) return 0;
+    return extreme(e, history, high) - extreme(e, history, low) <= bound;
 }
 
-void ekf_step(Ekf *e, EkfHistory *history, double z) {
+int ekf_step(Ekf *e, EkfHistory *history, double z) {
+    if (history->journal != NULL) history->journal->pushed = 0;
     e->samples++;
     ekf_predict(e);
-    if (isfinite(z)) ekf_update(e, z);
+    const int measured = isfinite(z);
+    if (measured) ekf_update(e, z);
     else e->missing++;
     e->reset_last = !ekf_healthy(e);
     if (e->reset_last) {
@@ -166,7 +175,41 @@ void ekf_step(Ekf *e, EkfHistory *history, double z) {
         memcpy(e->good, e->x, sizeof e->x);
         window_push(e, history, e->x[2], e->x[3]);
     }
-    e->converged = converged(e, history);
+    e->omega_converged = steady(e, history, 2, HIGH_OMEGA, LOW_OMEGA, e->omega_tol);
+    e->sigma_converged = steady(e, history, 3, HIGH_SIGMA, LOW_SIGMA, e->sigma_tol);
+    e->converged = e->omega_converged && e->sigma_converged;
+    return measured && !e->reset_last;
+}
+
+void ekf_take_back(Ekf *e, EkfHistory *history, const Ekf *before) {
+    const EkfJournal *journal = history->journal;
+    if (journal->pushed) {
+        for (int k = 0; k < EKF_QUEUES; k++) history->queued[journal->at[k]] = journal->was[k];
+        history->recent[2 * journal->slot] = journal->recent[0];
+        history->recent[2 * journal->slot + 1] = journal->recent[1];
+    }
+    *e = *before;
+}
+
+static int flag(long long value) { return value == 0 || value == 1; }
+
+int ekf_valid(const Ekf *e) {
+    for (int i = 0; i < 4; i++) {
+        if (!isfinite(e->x[i]) || !isfinite(e->good[i])) return 0;
+        for (int j = 0; j < 4; j++)
+            if (!isfinite(e->P[i][j])) return 0;
+    }
+    return e->window >= 2 && e->window <= EKF_MAX_WINDOW && e->count >= 0 && e->count <= e->window && e->slot >= 0
+           && e->slot < e->window && flag(e->converged) && flag(e->omega_converged) && flag(e->sigma_converged)
+           && flag(e->reset_last) && e->fs > 0.0 && isfinite(e->fs);
+}
+
+void ekf_restart_phasor(Ekf *e) {
+    e->x[0] = e->x[1] = 0.0;
+    for (int i = 0; i < 2; i++) {
+        for (int j = 0; j < 4; j++) e->P[i][j] = e->P[j][i] = 0.0;
+        e->P[i][i] = e->p0[i];
+    }
 }
 
 void ekf_rebuild_history(Ekf *e, EkfHistory *history) {

@@ -1,5 +1,5 @@
 /* What the twins' model parts (the EKF tuner, the STOS controller, the profile generator, the
- * ScheduledShaper) do with the variable table their generated model.c lists (model.h's VariableTable,
+ * ScheduledShaper, the TrackedShaper) do with the variable table their generated model.c lists (model.h's VariableTable,
  * which the layer describes, looks up and resets): find each meaning's value reference, refuse a value
  * out of a variable's range or a design parameter set to another value than the one the design was
  * made for at build time, and take a step of the sample clock with their inputs. */
