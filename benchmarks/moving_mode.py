@@ -16,6 +16,9 @@ same sequence of moves:
   ``cosim.master`` with the printer-bed plant FMU, both given the added mass by a ReferencePlayer FMU
   (the moves by another); its residual is that of the command the plant FMU received (``--no-fmu``
   leaves this line out).
+- EKF-tracked (FMUs in our master): the TrackedShaper's native FMU watching the printer-bed plant FMU's
+  accelerometer in closed loop through ``cosim.master``, started on the empty bed's 30 Hz. The master has
+  no noise source, so the measurement it sees is noise-free (the design layer's line has the noise).
 Each move: 20 ms at 5 m/s^2, 100 ms at 0.1 m/s, 20 ms braking, 200 ms at rest, back and forth; the load
 grows by 3 g a move. The plant is run sample by sample at 2 kHz (``plants.simulation``) with
 accelerometer noise of 20 mm/s^2 rms (Klipper's MEASURE_AXES_NOISE reports ~1-100 for a working
@@ -53,6 +56,7 @@ ACCELERATION, ACCELERATING, COASTING, RESTING = 5.0, 0.02, 0.10, 0.20  # m/s^2, 
 NOISE = 0.02  # m/s^2 rms on the bed's accelerometer (--noise)
 DESIGN_ZETA = 0.05  # the empty bed's, as a calibration finds it
 THROUGH_FMUS = "scheduled (FMUs in our master)"
+TRACKED_THROUGH_FMUS = "EKF-tracked (FMUs in our master)"
 
 
 def move_commands() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -176,6 +180,35 @@ def fmu_loop_run(schedule: Schedule, commands, values):
     return np.asarray(result["bed.acceleration"], dtype=float), longest
 
 
+def tracked_fmu_loop_run(f0: float, commands, values):
+    """(command the plant FMU received, longest design in ms) of the TrackedShaper's native FMU started at
+    ``f0`` Hz in closed loop with the printer-bed plant FMU through our master. The loop closes through the
+    plant's measurement, so Gauss-Seidel steps the plant first: its input row k + 1 is the shaper's sample
+    k, and the rows are shifted back by one to line up with the moves."""
+    from shapefmu.cosim.master import simulate
+    from shapefmu.fmi.native import build_plant_fmu, model_from_file
+    from shapefmu.fmi.native.twins import build_native
+    from shapefmu.fmi.ssp import System
+
+    with tempfile.TemporaryDirectory() as folder:
+        folder = Path(folder)
+        shaper = build_native("TrackedShaper", folder / "TrackedShaper.fmu", f0=f0, zeta0=DESIGN_ZETA, Ts=1.0 / FS,
+                              amplitude=2.0, gain=1.0)
+        system = (System("moving_mode_tracked")
+                  .add("command", _player(folder, "command", commands))
+                  .add("load", _player(folder, "load", values))
+                  .add("shaper", shaper)
+                  .add("bed", build_plant_fmu(model_from_file("printer_bed"), folder / "printer_bed.fmu"))
+                  .connect("command.y", "shaper.u").connect("bed.bed_acceleration", "shaper.measurement")
+                  .connect("load.y", "bed.added_mass").connect("shaper.y", "bed.acceleration"))
+        result = simulate(system, (commands.size - 1) / FS, 1.0 / FS,
+                          record=["bed.acceleration", "shaper.f", "shaper.zeta"])
+    received = np.asarray(result["bed.acceleration"], dtype=float)
+    designs = set(zip(np.asarray(result["shaper.f"], dtype=float).tolist(), np.asarray(result["shaper.zeta"]).tolist()))
+    longest = max(1e3 * design_impulses("zv", [(2 * math.pi * f, zeta)])[0][-1] for f, zeta in designs)
+    return np.append(received[1:], received[-1]), longest
+
+
 def plot(path, values, starts, results, noise) -> Path:
     from shapefmu.plots import plt, save_figure
 
@@ -213,6 +246,7 @@ def main(argv=None) -> int:
     }
     if not args.no_fmu:
         shapers[THROUGH_FMUS] = fmu_loop_run(recorded, commands, values)
+        shapers[TRACKED_THROUGH_FMUS] = tracked_fmu_loop_run(f0, commands, values)
     results = {name: (residual_per_move(bed, commands, shaped, values, starts), length)
                for name, (shaped, length) in shapers.items()}
     print(f"{MOVES} moves, {ADDED:.0f} g added ({f0:.1f} -> {f1:.1f} Hz), {FS:.0f} Hz sampling, "
@@ -220,8 +254,8 @@ def main(argv=None) -> int:
     for name, (residuals, length) in results.items():
         print(f"{name}: worst residual {100 * residuals.max():.1f} %, length {length:.1f} ms")
     if args.plot:
-        # the five shapers: the FMUs' line would lie on the scheduled one
-        drawn = {name: result for name, result in results.items() if name != THROUGH_FMUS}
+        # the five shapers: the FMUs' lines would lie on the design layer's
+        drawn = {name: result for name, result in results.items() if name not in (THROUGH_FMUS, TRACKED_THROUGH_FMUS)}
         print(f"plot written to {plot(args.plot, values, starts, drawn, args.noise)}")
     return 0
 
