@@ -68,18 +68,24 @@ class PoleForm:
             residue = sk * shape
             pole = complex(-sk, fk)
             upper, lower = 1 / (jf - pole), 1 / (jf - pole.conjugate())
-            total += residue * upper + residue.conjugate() * lower
+            near, far = residue * upper, residue.conjugate() * lower
+            total += near + far
             # d/d log f_k: f_k (j R upper^2 - j conj(R) lower^2); d/d log sigma_k: the residue scales with
             # sigma_k and the pole moves by -sigma_k
-            d_f = fk * 1j * (residue * upper**2 - residue.conjugate() * lower**2)
-            d_s = residue * upper + residue.conjugate() * lower - sk * (residue * upper**2 + residue.conjugate() * lower**2)
+            near_2, far_2 = residue * upper**2, residue.conjugate() * lower**2
+            d_f = fk * 1j * (near_2 - far_2)
+            d_s = near + far - sk * (near_2 + far_2)
             d_a = sk * (upper + lower)
             parts += [d_f, d_s, d_a] + ([1j * sk * (upper - lower)] if self.asymmetric else [])
         parts.append(np.ones(self.grid.shape, dtype=complex))
         if self.tilted:
             parts += [tilt.astype(complex), 1j * tilt]
         model = (np.abs(total) ** 2) @ self.weights
-        slopes = (2 * (np.conj(total)[None] * np.array(parts)).real) @ self.weights
+        # d|H|^2 = 2 Re(conj(H) dH), smeared; one part at a time: stacking them costs more than the rest
+        conjugate = np.conj(total)
+        slopes = np.empty((len(parts), self.grid.shape[0]))
+        for i, part in enumerate(parts):
+            slopes[i] = (2 * (conjugate * part).real) @ self.weights
         return model, slopes.T
 
 
