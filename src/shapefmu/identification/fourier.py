@@ -19,7 +19,6 @@ from dataclasses import dataclass, field
 import numpy as np
 
 BATCH_SAMPLES = 1 << 22  # 32 MB of float64 per batch of windowed segments
-FIRST_REACH = 64  # samples: where a peak's search for a higher sample starts, growing fourfold
 
 
 @dataclass(frozen=True)
@@ -171,21 +170,33 @@ def find_peaks(values, min_height: float = -math.inf) -> Peaks:
     rises = x[steps + 1] > x[steps]
     # a rise followed, over equal samples only, by a fall: the plateau steps[k] + 1 .. steps[k + 1]
     tops = np.flatnonzero(rises[:-1] & ~rises[1:])
-    indices = (steps[tops] + 1 + steps[tops + 1]) // 2
-    indices = indices[x[indices] >= min_height]
-    prominences = np.array([x[i] - max(_base(x, i), _base(x[::-1], x.size - 1 - i)) for i in indices])
-    return Peaks(indices, prominences.reshape(-1))
+    peaks = (steps[tops] + 1 + steps[tops + 1]) // 2
+    left = _bases(x, peaks)
+    right = _bases(x[::-1], x.size - 1 - peaks[::-1])[::-1]
+    keep = x[peaks] >= min_height
+    return Peaks(peaks[keep], (x[peaks] - np.maximum(left, right))[keep])
 
 
-def _base(x: np.ndarray, peak: int) -> float:
-    """The lowest sample left of ``peak`` (itself included) before the first strictly higher sample
-    or the start: looked for over a reach growing fourfold, so that the work is about the distance
-    to that sample, not to the start."""
-    reach = FIRST_REACH
-    while True:
-        start = max(peak - reach, 0)
-        higher = np.flatnonzero(x[start:peak] > x[peak])
-        if higher.size or start == 0:
-            stop = start + int(higher[-1]) + 1 if higher.size else 0
-            return float(x[stop:peak + 1].min())
-        reach *= 4
+def _bases(x: np.ndarray, peaks: np.ndarray) -> np.ndarray:
+    """For each of ``peaks`` (increasing, none at 0), the lowest sample from it back to the nearest
+    strictly higher sample or to the start (itself included): its base on the left.
+
+    The nearest strictly higher sample lies in a run of samples higher than the peak, and such a run
+    holds a local maximum unless it reaches the start; so the search need only visit the peaks and
+    the first sample, with the lowest sample between each two neighbours. A stack of the peaks not
+    yet topped (the monotonic stack of "previous greater element"), each with the lowest sample back
+    to the one below it, does that in one pass: O(samples)."""
+    if not peaks.size:
+        return np.empty(0)
+    marks = np.concatenate([[0], peaks])
+    gaps = np.minimum.reduceat(x[:peaks[-1] + 1], marks[:-1] + 1).tolist()  # lowest in (marks[k - 1], marks[k]]
+    heights, lows = [float(x[0])], [float(x[0])]
+    bases = []
+    for height, low in zip(x[peaks].tolist(), gaps):
+        while heights and heights[-1] <= height:  # a level line passes an equal height
+            heights.pop()
+            low = min(low, lows.pop())
+        bases.append(low)
+        heights.append(height)
+        lows.append(low)
+    return np.array(bases)
