@@ -51,14 +51,16 @@ class Peaks:
 def periodic_hann(length: int) -> np.ndarray:
     """The periodic Hann window, w[k] = 0.5 - 0.5 cos(2 pi k / length), k = 0 .. length - 1: one
     period of the raised cosine, the window whose shifts by a quarter or half of its length sum to a
-    constant (what ``scipy.signal.get_window('hann', length)`` returns).
+    constant (what ``scipy.signal.get_window('hann', length)`` returns). It is evaluated as
+    0.5 + 0.5 cos(theta), theta from -pi to pi in ``length`` steps (the same values: cos(x - pi) =
+    -cos x), which rounds as SciPy's does, so that the spectra are SciPy's to the last bit.
 
     >>> [round(float(w), 12) for w in periodic_hann(4)]
     [0.0, 0.5, 1.0, 0.5]
     """
     if not (isinstance(length, int) and length >= 2):
         raise ValueError(f"length must be an integer >= 2, got {length!r}")
-    return 0.5 - 0.5 * np.cos(2 * np.pi * np.arange(length) / length)
+    return 0.5 + 0.5 * np.cos(np.linspace(-np.pi, np.pi, length + 1)[:length])
 
 
 def _segments_checked(samples, fs: float, window, overlap: int) -> tuple[np.ndarray, np.ndarray, int]:

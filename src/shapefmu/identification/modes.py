@@ -49,7 +49,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from shapefmu.identification.fourier import find_peaks, periodic_hann
+from shapefmu.identification.fourier import find_peaks
 from shapefmu.identification.poles import fit_poles
 from shapefmu.identification.spectra import KLIPPER_MAX_FREQ, Spectrogram, Spectrum, klipper_normalised
 
@@ -174,7 +174,7 @@ def _overlap_correlation(window: str) -> float:
     the window's overlapping halves' product, squared, over its energy squared, for the overlaps
     ``spectra`` uses (Klipper's Kaiser windows: a half; our Hann windows: three quarters)."""
     length = 1024
-    taps = np.kaiser(length, 6.0) if window == "kaiser6" else periodic_hann(length)
+    taps = np.kaiser(length, 6.0) if window == "kaiser6" else np.hanning(length + 1)[:length]
     hop = length // 2 if window == "kaiser6" else length // 4
     return float(np.dot(taps[hop:], taps[:-hop]) / np.dot(taps, taps))
 

@@ -204,7 +204,7 @@ def spectral_kernel(window: str, oversample: int = 8) -> tuple[np.ndarray, np.nd
     if window not in WINDOWS:
         raise ValueError(f"window must be one of {', '.join(repr(w) for w in WINDOWS)}, got {window!r}")
     length = 256
-    taps = periodic_hann(length) if window == "hann" else np.kaiser(length, KLIPPER_KAISER_BETA)
+    taps = np.hanning(length + 1)[:length] if window == "hann" else np.kaiser(length, KLIPPER_KAISER_BETA)
     response = np.abs(np.fft.fft(taps, length * oversample)) ** 2
     response = np.fft.fftshift(response)
     offsets = (np.arange(length * oversample) - length * oversample // 2) / oversample
