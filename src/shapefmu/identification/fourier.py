@@ -102,9 +102,10 @@ def welch_psd(samples, fs: float, window, overlap: int, *, detrend: bool) -> Per
 
     Welch (1967), "The use of fast Fourier transform for the estimation of power spectra: a method
     based on time averaging over short, modified periodograms", IEEE Trans. Audio Electroacoust.
-    AU-15(2), 70-73, eqs. (3)-(5): segment k windowed by W gives A_k(n) = sum_j X_k(j) W(j)
-    exp(-2 pi i j n / L), its modified periodogram I_k = |A_k|^2 / (L U) with U = sum_j W(j)^2 / L,
-    and the estimate their average. In density units per hertz (what ``scaling='density'`` means in
+    AU-15(2), 70-73: segment k windowed by W gives A_k(n) = sum_j X_k(j) W(j) exp(-2 pi i j n / L)
+    (Welch writes it with a factor 1/L, and I_k with L^2 more), its modified periodogram
+    I_k = |A_k|^2 / (L U) with U = sum_j W(j)^2 / L, and the estimate is the average of the I_k over
+    the segments. In density units per hertz (what ``scaling='density'`` means in
     SciPy) that is |A_k|^2 / (fs sum_j W(j)^2). A real signal's power at -f equals that at +f, so the
     one-sided density doubles every bin but 0 Hz and, for an even L, fs/2, which have no mirror.
 
