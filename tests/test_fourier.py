@@ -168,9 +168,9 @@ def test_peaks_name_a_value_that_is_not_finite():
 
 
 def test_identify_and_recommend_of_a_raw_recording_load_no_scipy_signal(tmp_path):
-    """SciPy's signal package loads its stats, interpolate and integrate packages: a second of CPU
-    on the way from a raw recording to a recommendation, where Klipper's calibrate_shaper.py takes
-    two or three in all (benchmarks/recommend.py). The run is a separate process: this one has
+    """SciPy's signal package loads its stats, interpolate and integrate packages: about 0.7 s of
+    CPU on the way from a raw recording to a recommendation, where Klipper's calibrate_shaper.py
+    takes two or three in all (benchmarks/recommend.py). The run is a separate process: this one has
     SciPy's signal loaded already."""
     path = tmp_path / "resonances_x.csv"
     modes = [syn.SyntheticMode(38.0, 0.06, 0.5), syn.SyntheticMode(61.0, 0.08, 0.3)]
