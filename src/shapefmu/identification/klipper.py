@@ -54,6 +54,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from shapefmu.identification import metrics
+from shapefmu.identification.fourier import welch_psd
 from shapefmu.identification.spectra import Spectrum
 
 KLIPPER_COMMIT = "84104bbbd7625d28b4eaaad83f4562972460ecd9"  # where the definitions were read
@@ -228,8 +229,6 @@ def recording_psd(recording, axis="xyz") -> Spectrum:
     >>> round(float(bin_width), 3), bool(abs(spectrum.freq[np.argmax(spectrum.psd)] - 40) < bin_width / 2)
     (1.563, True)
     """
-    from scipy.signal import welch
-
     from shapefmu.identification.spectra import axis_samples
 
     signals = list(recording.channels.values()) if axis == "xyz" else [axis_samples(recording, axis)]
@@ -242,11 +241,10 @@ def recording_psd(recording, axis="xyz") -> Spectrum:
     total = None
     for samples in signals:
         # the symmetric Kaiser window (numpy's): scipy's ("kaiser", 6.0) would be the periodic one
-        freq, psd = welch(samples, rate, window=np.kaiser(segment, 6.0), noverlap=segment // 2, detrend="constant",
-                          scaling="density")
-        total = psd if total is None else total + psd
+        found = welch_psd(samples, rate, np.kaiser(segment, 6.0), segment // 2, detrend=True)
+        total = found.psd if total is None else total + found.psd
     name = axis if isinstance(axis, str) else "direction"
-    return Spectrum(recording.source, name, freq, normalize_psd(freq, total),
+    return Spectrum(recording.source, name, found.freq, normalize_psd(found.freq, total),
                     f"Klipper's spectrum: Welch, Kaiser window (beta 6) of {segment} samples, half overlapping, "
                     f"normalised (P / (f + 0.1), tapered below 10 Hz)")
 

@@ -48,8 +48,8 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.signal import find_peaks
 
+from shapefmu.identification.fourier import find_peaks
 from shapefmu.identification.poles import fit_poles
 from shapefmu.identification.spectra import KLIPPER_MAX_FREQ, Spectrogram, Spectrum, klipper_normalised
 
@@ -237,10 +237,11 @@ def find_modes(spectrum: Spectrum, *, excitation: str = "sweep", f_min: float | 
     if width > 1:  # a moving average, the edges repeated
         seen = np.convolve(np.pad(seen, (width // 2, (width - 1) // 2), mode="edge"), np.ones(width) / width, "valid")
     top = float(seen.max())
-    peaks, props = find_peaks(seen, height=min_share * top, prominence=0)
+    found = find_peaks(seen, min_share * top)
+    peaks = found.indices
     notes = []
     if excitation == "flat":  # a random excitation's spectrum: each peak must rise out of the scatter
-        kept = np.log(seen[peaks]) - np.log(seen[peaks] - props["prominences"] + top * 1e-300) > NOISE_SIGMAS * scatter
+        kept = np.log(seen[peaks]) - np.log(seen[peaks] - found.prominences + top * 1e-300) > NOISE_SIGMAS * scatter
         peaks = peaks[kept]
     if spectrogram is not None and excitation == "sweep":
         width = 1.5 * seen_step

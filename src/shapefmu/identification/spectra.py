@@ -19,7 +19,8 @@ import math
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-from scipy.signal import welch
+
+from shapefmu.identification.fourier import periodic_hann, stft, welch_psd
 
 
 # ``Recording`` (identification.recordings) is named in annotations only: recordings imports this module.
@@ -124,16 +125,16 @@ def spectrum(recording: Recording, axis="xyz", *, resolution: float = RESOLUTION
                 f"{recording.fs / segment:.3g} Hz resolution), 75 % overlap, mean removed")
     psd = 0.0
     pad = 3 * segment // 4
+    window = periodic_hann(segment)
     for samples in _signals(recording, axis):
         # Hann windows overlapping by 3/4 have squares that sum to a constant, and the record padded by
         # 3/4 of a segment at each end is covered four times everywhere: every sample weighs the same.
         # (At 1/2 overlap a sweep's energy is weighted with a ripple of one hop's worth of frequency.)
         padded = np.concatenate([np.zeros(pad), samples - np.mean(samples), np.zeros(pad)])
-        freq, p = welch(padded, recording.fs, window="hann", nperseg=segment, noverlap=pad, detrend=False)
-        psd = psd + p
-    segments = (n + 2 * pad - pad) // (segment - pad)
-    result = Spectrum(recording.source, _axis_name(axis), freq[1:], psd[1:], settings, window="hann",
-                      segments=segments)
+        found = welch_psd(padded, recording.fs, window, pad, detrend=False)
+        psd = psd + found.psd
+    result = Spectrum(recording.source, _axis_name(axis), found.freq[1:], psd[1:], settings, window="hann",
+                      segments=found.segments)
     return undo_sweep_excitation(result) if undo_sweep else result
 
 
@@ -160,13 +161,12 @@ def klipper_psd(recording: Recording, axis="xyz") -> Spectrum:
     window = np.kaiser(segment, KLIPPER_KAISER_BETA)
     psd = 0.0
     for samples in _signals(recording, axis):
-        freq, p = welch(samples, recording.fs, window=window, nperseg=segment, noverlap=segment // 2,
-                        detrend="constant")
-        psd = psd + p
+        found = welch_psd(samples, recording.fs, window, segment // 2, detrend=True)
+        psd = psd + found.psd
     settings = (f"Klipper's: Welch, Kaiser window (beta 6), {segment} samples ({segment / recording.fs:.3g} s, "
                 f"{recording.fs / segment:.3g} Hz resolution), 50 % overlap, each segment's mean removed")
-    return Spectrum(recording.source, _axis_name(axis), freq[1:], psd[1:], settings, window="kaiser6",
-                    segments=(n - segment // 2) // (segment - segment // 2))
+    return Spectrum(recording.source, _axis_name(axis), found.freq[1:], psd[1:], settings, window="kaiser6",
+                    segments=found.segments)
 
 
 def klipper_normalised(spectrum: Spectrum) -> Spectrum:
@@ -247,15 +247,13 @@ def spectrogram(recording: Recording, axis="xyz", seconds: float = 0.5) -> Spect
     >>> round(gram.steadiness(95, 99), 2), gram.steadiness(38, 42) < 0.01
     (1.0, True)
     """
-    from scipy.signal import stft
-
     segment = 1 << int(recording.fs * seconds - 1).bit_length()
+    window = periodic_hann(segment)
     power = 0.0
     for samples in _signals(recording, axis):
-        freq, times, z = stft(samples - np.mean(samples), recording.fs, window="hann", nperseg=segment,
-                              noverlap=segment // 2, boundary=None, padded=False)
-        power = power + np.abs(z.T) ** 2
-    return Spectrogram(freq, times, power)
+        found = stft(samples - np.mean(samples), recording.fs, window, segment // 2)
+        power = power + np.abs(found.z.T) ** 2
+    return Spectrogram(found.freq, found.times, power)
 
 
 def undo_sweep_excitation(spectrum: Spectrum) -> Spectrum:
