@@ -186,8 +186,20 @@ int mf_step(ModeFollowing *mf, ModelInstance *inst, double command, double omega
         memmove(mf->segments, mf->segments + folded, (size_t)(mf->count - folded) * sizeof(MfSegment));
         mf->count -= folded;
     }
-    *y = sum(mf, k, command);
+    if (y != NULL) *y = sum(mf, k, command);
     mf->k = k + 1;
+    return 0;
+}
+
+int mf_output(ModeFollowing *mf, double command, double omega, double zeta, double *y) {
+    const MfTaps *taps = &mf->segments[mf->count - 1].taps;
+    MfTaps designed;
+    if (moved(mf, omega, zeta)) {
+        if (design(mf, omega, zeta, &designed) != 0) return -1;
+        taps = &designed;
+    }
+    const double first = taps->delay[0] == 0 ? taps->weight[0] : 0.0;
+    *y = sum(mf, mf->k, mf->last) + first * (command - mf->last);
     return 0;
 }
 

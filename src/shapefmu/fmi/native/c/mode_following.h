@@ -2,7 +2,7 @@
  * runtime/scheduled_shaper.py's ModeFollowingShaper in C, operation for operation (its module
  * docstring derives why each change of the command keeps the design in force when it was made,
  * and how the segments of changes under one design are summed and folded into the base). For the
- * model parts of the shapers that follow a moving mode (tracked_shaper_part.c). */
+ * model parts of the shapers that follow a moving mode (scheduled_part.c, tracked_shaper_part.c). */
 #ifndef MODE_FOLLOWING_H
 #define MODE_FOLLOWING_H
 
@@ -53,9 +53,13 @@ typedef struct {
 int mf_start(ModeFollowing *mf, ModelInstance *inst, double fs, double omega, double zeta, ClosedFormKind kind,
              int order, double u0, double resolution);
 void mf_free(ModeFollowing *mf, ModelInstance *inst);
-/* Shape one command sample with the design for (omega, zeta), re-designed if it moved: 0 and *y,
- * or -1 (mf->failure says why). */
+/* Shape one command sample with the design for (omega, zeta), re-designed if it moved: 0 and *y
+ * (y may be NULL: the sample taken, its sum left to mf_output), or -1 (mf->failure says why). */
 int mf_step(ModeFollowing *mf, ModelInstance *inst, double command, double omega, double zeta, double *y);
+/* What mf_step(command, omega, zeta) will give, without taking the sample (ModeFollowingShaper.output):
+ * the output if the command holds plus the first tap of the design for the mode times the change.
+ * 0 and *y, or -1 (mf->failure says why). */
+int mf_output(ModeFollowing *mf, double command, double omega, double zeta, double *y);
 /* dst becomes a copy of src (dst's buffers reused when large enough): 0, or -1 out of memory. */
 int mf_copy(ModeFollowing *dst, const ModeFollowing *src, ModelInstance *inst);
 
