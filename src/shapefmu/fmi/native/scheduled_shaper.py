@@ -30,7 +30,7 @@ MEANINGS = {"kind": "SCHEDULED_KIND", "n": "SCHEDULED_ORDER", "vtol": "SCHEDULED
 MAX_ORDER = 62  # c/mode_following.h's MF_MAX_ORDER: 64 impulses of one design
 NATIVE_NOTE = ("This FMU is the native C twin of the pythonfmu ScheduledShaper: the same variables, sampled semantics "
                "and numbers, no Python needed; sources/ holds its C code. It re-designs the closed-form kinds (zv, zvd, "
-               "zvdd, zv_dn up to n = 62, mzv) and keeps at most 4096 designs in flight within one shaper length.")
+               "zvdd, zv_dn up to n = 62, mzv) and refuses a design with more than 10^6 taps in flight.")
 
 
 def _meaning(name: str) -> str:

@@ -16,9 +16,10 @@
 #define MF_MAX_TAPS (2 * MF_MAX_IMPULSES)
 /* runtime/limits.py's MAX_SAMPLED_LENGTH: the longest design, in samples. */
 #define MF_MAX_LENGTH 1000000.0
-/* Designs in flight at once (a segment each): re-designs during one shaper length (C only; the
- * Python kernel keeps any number). */
-#define MF_MAX_SEGMENTS 4096
+/* Taps summed per sample over the designs in flight (16 bytes each; C only, the Python kernel keeps
+ * any number): a new design at every sample of a moving command keeps a segment per sample in
+ * flight, as many as the longest design spans. */
+#define MF_MAX_TAPS_IN_FLIGHT 1000000LL
 /* The ring of past commands: a power of two holding the longest design (MF_MAX_LENGTH + 2 samples). */
 #define MF_MAX_RING (1LL << 20)
 
@@ -28,19 +29,25 @@ typedef struct {
     double weight[MF_MAX_TAPS];
 } MfTaps;
 
+typedef struct {
+    long long delay;
+    double weight;
+} MfTap;
+
 /* scheduled_shaper.py's CommandSegment: the changes of the command made under one design. */
 typedef struct {
-    MfTaps taps;
-    long long start, open, end, moved, reach;  /* open: its design is in force (end not yet set) */
+    MfTap *taps;  /* n_taps of them, increasing delays */
+    long long n_taps, start, open, end, moved, reach;  /* open: its design is in force (end not yet set) */
     double base, end_value;
 } MfSegment;
 
-/* Plain data but for ring and segments (copied and saved by the functions below). */
+/* Plain data but for ring, segments and their taps (copied and saved by the functions below). */
 typedef struct {
     ClosedFormKind kind;
     int order;
     double fs, h, resolution, mode[2], last;
-    long long designs, k, mask, count, capacity;  /* ring of mask + 1 commands; count segments of capacity */
+    long long designs, k, mask;  /* ring of mask + 1 commands */
+    long long head, count, capacity, taps_in_flight;  /* the m-th segment at segments[(head + m) & (capacity - 1)] */
     double *ring;
     MfSegment *segments;
     int has_pending;  /* the newest design, shared by the probe of a sample and the step that takes it */

@@ -12,7 +12,7 @@
  * Every parameter is used at the exit of initialisation and every design is closed-form, so all of
  * them may change before it, as in the pythonfmu FMU. A mode above the Nyquist frequency, a design
  * longer than MAX_SAMPLED_LENGTH samples, a scheduling value where the law gives no mode, or more
- * designs in flight than MF_MAX_SEGMENTS are refused with a message and an error status.
+ * taps in flight than MF_MAX_TAPS_IN_FLIGHT are refused with a message and an error status.
  */
 #include <math.h>
 #include <stdarg.h>
