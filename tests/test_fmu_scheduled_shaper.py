@@ -161,3 +161,18 @@ def test_the_native_twin_refuses_what_it_cannot_design_in_c(builds, tmp_path, ca
     refused_start_values(native, {"n": 63}, when_set=True)
     printed = capfd.readouterr().out
     assert "kind must be one of zv, zvd, zvdd, zv_dn, mzv" in printed and "n must be an integer in [0, 62]" in printed
+
+
+def test_the_native_twin_keeps_thousands_of_designs_in_flight(builds):
+    """A slow mode (ZV at 0.2 to 0.25 Hz: 5000 samples long at 2 kHz) re-designed at every sample of a
+    ramp keeps a design per sample in flight: 5000 at the end, past the 4096 a fixed-size C store once
+    held; still the change-by-change sum (only the native twin: the pythonfmu FMU's sum is Python)."""
+    law = schedule_start_values([0.0, 1.0], [0.2, 0.25], [0.0, 0.0])
+    fmu = builds.native("ScheduledShaper", **{**SCHEDULED_STARTS, **law, "kind": "zv", "resolution": 0.0})
+    n = 6000
+    u, values = np.arange(n) * 1e-3, np.linspace(0.0, 1.0, n)
+    reference = np.zeros(n)
+    for j, value in enumerate(values):
+        for d, w in closed_form_taps("zv", 0.2 + 0.05 * value, 0.0).items():
+            reference[j + d:] += w * (1e-3 if j else 0.0)
+    np.testing.assert_allclose(run_fmpy(fmu, u, values), reference, rtol=0, atol=1e-12)

@@ -2,8 +2,9 @@
 
 ``build_native_scheduled_shaper(out_path, **start_values) -> Path`` writes an FMI 2.0 (or 3.0) Co-Simulation
 FMU: the generic FMI layer, the ScheduledShaper's model part (``c/scheduled_part.c``:
-runtime/scheduled_shaper.py's ModeSchedule, ModeFollowingShaper and ScheduledShaperKernel, operation for
-operation), the absolute sample grid (``c/sample_clock.c``), the closed-form designs (``c/shaper_designs.c``)
+runtime/scheduled_shaper.py's ModeSchedule and ScheduledShaperKernel, operation for operation), the shaper
+that follows its mode with no jump (``c/mode_following.c``: ModeFollowingShaper, shared with the
+TrackedShaper), the absolute sample grid (``c/sample_clock.c``), the closed-form designs (``c/shaper_designs.c``)
 and a generated ``model.c`` holding the variables and their start values. Nothing is designed at build
 time: the schedule's mode is re-designed in C at each sample where it moved, so every parameter may be set
 before the exit of initialisation, as in the pythonfmu FMU. The start values are checked here by the kind's
@@ -19,14 +20,14 @@ from pathlib import Path
 from shapefmu.fmi.native.kernel_fmu import closed_form_only, designed_twin, twin_variables_c, write_native_fmu
 
 NAME = "ScheduledShaper"
-SOURCES = ("scheduled_part.c", "sample_clock.c", "shaper_designs.c", "twin_variables.c")
-HEADERS = ("scheduled_model.h", "sample_clock.h", "shaper_designs.h", "twin_variables.h")
+SOURCES = ("scheduled_part.c", "mode_following.c", "sample_clock.c", "shaper_designs.c", "twin_variables.c")
+HEADERS = ("scheduled_model.h", "mode_following.h", "sample_clock.h", "shaper_designs.h", "twin_variables.h")
 MEANINGS = {"kind": "SCHEDULED_KIND", "n": "SCHEDULED_ORDER", "vtol": "SCHEDULED_TOLERANCE",
             "n_rows": "SCHEDULED_ROWS", "values": "SCHEDULED_VALUE", "f": "SCHEDULED_FREQUENCY",
             "zeta": "SCHEDULED_DAMPING", "extrapolate": "SCHEDULED_EXTRAPOLATE", "resolution": "SCHEDULED_RESOLUTION",
             "Ts": "SCHEDULED_PERIOD", "u0": "SCHEDULED_REST", "u": "SCHEDULED_COMMAND",
             "scheduling": "SCHEDULED_SCHEDULING", "y": "SCHEDULED_OUTPUT"}
-MAX_ORDER = 62  # c/scheduled_part.c: 64 impulses of one design
+MAX_ORDER = 62  # c/mode_following.h's MF_MAX_ORDER: 64 impulses of one design
 NATIVE_NOTE = ("This FMU is the native C twin of the pythonfmu ScheduledShaper: the same variables, sampled semantics "
                "and numbers, no Python needed; sources/ holds its C code. It re-designs the closed-form kinds (zv, zvd, "
                "zvdd, zv_dn up to n = 62, mzv) and refuses a design with more than 10^6 taps in flight.")

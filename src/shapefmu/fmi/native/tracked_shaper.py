@@ -10,8 +10,8 @@ and a generated ``model.c`` holding the variables and their start values. Nothin
 build time: every parameter is used at the exit of initialisation, so each may be set before it,
 as in the pythonfmu FMU. The start values are checked here by the kind's own initialisation
 (``shapefmu.fmi.kinds.tracked_shaper``). The C re-designs in closed form only, so this FMU refuses
-the other kinds (ei, ei2, ei3, ...), a zv_dn order above 62 and more than 4096 designs in flight
-within one shaper length.
+the other kinds (ei, ei2, ei3, ...), a zv_dn order above 62 and a design with more than 10^6 taps
+in flight (re-designs within one shaper length).
 """
 
 from __future__ import annotations
@@ -34,8 +34,8 @@ MEANINGS = {"kind": "TRACK_KIND", "n": "TRACK_ORDER", "vtol": "TRACK_VTOL", "f0"
 MAX_ORDER = 62  # c/mode_following.h's MF_MAX_ORDER: 64 impulses
 NATIVE_NOTE = ("This FMU is the native C twin of the pythonfmu TrackedShaper: the same variables, sampled semantics "
                "and numbers, no Python needed; sources/ holds its C code. Unlike the pythonfmu FMU it designs the "
-               "closed-form kinds only (zv, zvd, zvdd, zv_dn with n <= 62, mzv) and keeps at most 4096 designs in "
-               "flight within one shaper length.")
+               "closed-form kinds only (zv, zvd, zvdd, zv_dn with n <= 62, mzv) and refuses a design with more than "
+               "10^6 taps in flight.")
 
 
 def build_native_tracked_shaper(out_path, *, fmi_version: str = "2.0", clock: bool = False, **start_values) -> Path:

@@ -72,7 +72,27 @@ static int design(ModeFollowing *mf, double omega, double zeta, MfTaps *taps) {
     return 0;
 }
 
-static long long reach_of(const MfTaps *taps) { return taps->delay[taps->count - 1] + 1; }
+static MfSegment *segment_at(const ModeFollowing *mf, long long m) {
+    return &mf->segments[(mf->head + m) & (mf->capacity - 1)];
+}
+
+/* Segment g's taps become the design taps (its old ones released): 0, or -1 (failure set). */
+static int take_taps(ModeFollowing *mf, ModelInstance *inst, MfSegment *g, const MfTaps *taps) {
+    const long long in_flight = mf->taps_in_flight - g->n_taps + taps->count;
+    if (in_flight > MF_MAX_TAPS_IN_FLIGHT) {
+        snprintf(mf->failure, sizeof mf->failure, "the designs in flight would hold %lld taps, more than the %lld "
+                 "summed per sample (a new design at nearly every sample of a moving command): raise resolution",
+                 in_flight, MF_MAX_TAPS_IN_FLIGHT);
+        return -1;
+    }
+    MfTap *copy = model_allocate(inst, (size_t)taps->count, sizeof(MfTap));
+    if (copy == NULL) return fail(mf, "out of memory for a design's taps");
+    for (int i = 0; i < taps->count; i++) copy[i].delay = taps->delay[i], copy[i].weight = taps->weight[i];
+    model_release(inst, g->taps);
+    g->taps = copy, g->n_taps = taps->count, g->reach = copy[taps->count - 1].delay + 1;
+    mf->taps_in_flight = in_flight;
+    return 0;
+}
 
 /* ModeFollowingShaper._fit: grow the ring to hold reach samples, the commands copied in order. */
 static int fit(ModeFollowing *mf, ModelInstance *inst, long long reach) {
@@ -89,12 +109,31 @@ static int fit(ModeFollowing *mf, ModelInstance *inst, long long reach) {
     return 0;
 }
 
-static void segment_start(MfSegment *segment, const MfTaps *taps, long long start, double base) {
-    memset(segment, 0, sizeof *segment);
-    segment->taps = *taps;
-    segment->start = start, segment->base = base, segment->end_value = base;
-    segment->open = 1;
-    segment->reach = reach_of(taps);
+/* A new open segment at the back with the design taps, starting at sample start after the command
+ * base; the deque doubled when full. 0, or -1 (failure set). */
+static int push_segment(ModeFollowing *mf, ModelInstance *inst, const MfTaps *taps, long long start, double base) {
+    if (mf->count == mf->capacity) {
+        MfSegment *grown = model_allocate(inst, 2 * (size_t)mf->capacity, sizeof(MfSegment));
+        if (grown == NULL) return fail(mf, "out of memory for the designs in flight");
+        for (long long m = 0; m < mf->count; m++) grown[m] = *segment_at(mf, m);
+        model_release(inst, mf->segments);
+        mf->segments = grown, mf->head = 0, mf->capacity *= 2;
+    }
+    MfSegment *g = segment_at(mf, mf->count);
+    memset(g, 0, sizeof *g);
+    g->start = start, g->base = base, g->end_value = base, g->open = 1;
+    if (take_taps(mf, inst, g, taps) != 0) return -1;
+    mf->count++;
+    return 0;
+}
+
+/* The oldest segment folded into the base (or dropped). */
+static void pop_segment(ModeFollowing *mf, ModelInstance *inst) {
+    MfSegment *g = segment_at(mf, 0);
+    mf->taps_in_flight -= g->n_taps;
+    model_release(inst, g->taps);
+    g->taps = NULL;
+    mf->head = (mf->head + 1) & (mf->capacity - 1), mf->count--;
 }
 
 int mf_start(ModeFollowing *mf, ModelInstance *inst, double fs, double omega, double zeta, ClosedFormKind kind,
@@ -108,53 +147,34 @@ int mf_start(ModeFollowing *mf, ModelInstance *inst, double fs, double omega, do
     mf->segments = model_allocate(inst, 4, sizeof(MfSegment));
     mf->ring = model_allocate(inst, 1, sizeof(double));
     if (mf->segments == NULL || mf->ring == NULL) return fail(mf, "out of memory for the shaper");
-    mf->capacity = 4, mf->count = 1;
-    segment_start(&mf->segments[0], &taps, 0, u0);
+    mf->capacity = 4;
     mf->last = u0, mf->ring[0] = u0, mf->mask = 0;
-    return fit(mf, inst, mf->segments[0].reach);
+    if (push_segment(mf, inst, &taps, 0, u0) != 0) return -1;
+    return fit(mf, inst, segment_at(mf, 0)->reach);
 }
 
 void mf_free(ModeFollowing *mf, ModelInstance *inst) {
+    while (mf->count > 0) pop_segment(mf, inst);
     model_release(inst, mf->ring);
     model_release(inst, mf->segments);
     mf->ring = NULL, mf->segments = NULL;
-    mf->count = mf->capacity = 0;
+    mf->head = mf->capacity = mf->taps_in_flight = 0;
 }
 
 static int moved(const ModeFollowing *mf, double omega, double zeta) {
     return fabs(omega - mf->mode[0]) > mf->resolution * mf->mode[0] || fabs(zeta - mf->mode[1]) > mf->resolution;
 }
 
-/* A new segment at the end, the array grown by doubling up to MF_MAX_SEGMENTS. */
-static MfSegment *append(ModeFollowing *mf, ModelInstance *inst) {
-    if (mf->count == mf->capacity) {
-        if (mf->capacity >= MF_MAX_SEGMENTS) {
-            snprintf(mf->failure, sizeof mf->failure, "the mode moved during a move more than %d times within one "
-                     "shaper length: at most %d designs in flight (raise resolution)", MF_MAX_SEGMENTS, MF_MAX_SEGMENTS);
-            return NULL;
-        }
-        MfSegment *grown = model_allocate(inst, 2 * (size_t)mf->capacity, sizeof(MfSegment));
-        if (grown == NULL) {
-            fail(mf, "out of memory for the designs in flight");
-            return NULL;
-        }
-        memcpy(grown, mf->segments, (size_t)mf->count * sizeof(MfSegment));
-        model_release(inst, mf->segments);
-        mf->segments = grown, mf->capacity *= 2;
-    }
-    return &mf->segments[mf->count++];
-}
-
 /* ModeFollowingShaper._sum: the output at sample k with command u there. */
 static double sum(const ModeFollowing *mf, long long k, double u) {
-    double y = mf->segments[0].base;
-    for (long long s = 0; s < mf->count; s++) {
-        const MfSegment *segment = &mf->segments[s];
-        for (int i = 0; i < segment->taps.count; i++) {
-            const long long j = k - segment->taps.delay[i];
-            if (j < segment->start) continue;
+    double y = segment_at(mf, 0)->base;
+    for (long long m = 0; m < mf->count; m++) {
+        const MfSegment *g = segment_at(mf, m);
+        for (long long i = 0; i < g->n_taps; i++) {
+            const long long j = k - g->taps[i].delay;
+            if (j < g->start) continue;
             const double value = j == k ? u : mf->ring[j & mf->mask];
-            y += segment->taps.weight[i] * ((segment->open || j <= segment->end ? value : segment->end_value) - segment->base);
+            y += g->taps[i].weight * ((g->open || j <= g->end ? value : g->end_value) - g->base);
         }
     }
     return y;
@@ -162,36 +182,44 @@ static double sum(const ModeFollowing *mf, long long k, double u) {
 
 int mf_step(ModeFollowing *mf, ModelInstance *inst, double command, double omega, double zeta, double *y) {
     const long long k = mf->k;
-    MfSegment *current = &mf->segments[mf->count - 1];
     if (moved(mf, omega, zeta)) {
         MfTaps taps;
         if (design(mf, omega, zeta, &taps) != 0) return -1;
         mf->mode[0] = omega, mf->mode[1] = zeta;
         mf->designs++;
+        MfSegment *current = segment_at(mf, mf->count - 1);
         if (current->moved) {  /* the changes made so far keep their design: a new segment begins here */
             current->open = 0, current->end = k - 1, current->end_value = mf->last;
-            if ((current = append(mf, inst)) == NULL) return -1;
-            segment_start(current, &taps, k, mf->last);
-        } else {  /* no change commanded under the old design: nothing in flight depends on it */
-            current->taps = taps, current->reach = reach_of(&taps);
+            if (push_segment(mf, inst, &taps, k, mf->last) != 0) return -1;
+        } else if (take_taps(mf, inst, current, &taps) != 0) {  /* nothing in flight depends on the old design */
+            return -1;
         }
-        if (fit(mf, inst, current->reach) != 0) return -1;
+        if (fit(mf, inst, segment_at(mf, mf->count - 1)->reach) != 0) return -1;
     }
-    if (command != mf->last) current->moved = 1;
+    if (command != mf->last) segment_at(mf, mf->count - 1)->moved = 1;
     mf->ring[k & mf->mask] = command;
     mf->last = command;
-    long long folded = 0;  /* segments whose last change has reached their last impulse: into the base */
-    while (mf->count - folded > 1 && k - (mf->segments[folded].reach - 1) >= mf->segments[folded].end) folded++;
-    if (folded) {
-        memmove(mf->segments, mf->segments + folded, (size_t)(mf->count - folded) * sizeof(MfSegment));
-        mf->count -= folded;
-    }
-    *y = sum(mf, k, command);
+    /* a segment whose last change has reached its last impulse is folded into the base */
+    while (mf->count > 1 && k - (segment_at(mf, 0)->reach - 1) >= segment_at(mf, 0)->end) pop_segment(mf, inst);
+    if (y != NULL) *y = sum(mf, k, command);
     mf->k = k + 1;
     return 0;
 }
 
+int mf_output(ModeFollowing *mf, double command, double omega, double zeta, double *y) {
+    const MfSegment *current = segment_at(mf, mf->count - 1);
+    double first = current->taps[0].delay == 0 ? current->taps[0].weight : 0.0;
+    if (moved(mf, omega, zeta)) {
+        MfTaps taps;
+        if (design(mf, omega, zeta, &taps) != 0) return -1;
+        first = taps.delay[0] == 0 ? taps.weight[0] : 0.0;
+    }
+    *y = sum(mf, mf->k, mf->last) + first * (command - mf->last);
+    return 0;
+}
+
 int mf_copy(ModeFollowing *dst, const ModeFollowing *src, ModelInstance *inst) {
+    while (dst->count > 0) pop_segment(dst, inst);
     double *ring = dst->ring;
     MfSegment *segments = dst->segments;
     long long capacity = dst->capacity;
@@ -206,18 +234,30 @@ int mf_copy(ModeFollowing *dst, const ModeFollowing *src, ModelInstance *inst) {
     }
     *dst = *src;
     dst->ring = ring, dst->segments = segments, dst->capacity = capacity;
+    dst->head = dst->count = dst->taps_in_flight = 0;
     if (ring == NULL || segments == NULL) {
         mf_free(dst, inst);
         return -1;
     }
-    memcpy(ring, src->ring, ((size_t)src->mask + 1) * sizeof(double));
-    memcpy(segments, src->segments, (size_t)src->count * sizeof(MfSegment));
+    memcpy(dst->ring, src->ring, ((size_t)src->mask + 1) * sizeof(double));
+    for (long long m = 0; m < src->count; m++) {
+        const MfSegment *g = segment_at(src, m);
+        MfSegment *copy = &dst->segments[m];
+        *copy = *g;
+        copy->taps = model_allocate(inst, (size_t)g->n_taps, sizeof(MfTap));
+        if (copy->taps == NULL) {
+            mf_free(dst, inst);
+            return -1;
+        }
+        memcpy(copy->taps, g->taps, (size_t)g->n_taps * sizeof(MfTap));
+        dst->count = m + 1, dst->taps_in_flight += g->n_taps;
+    }
     return 0;
 }
 
 /* ---------------------------------------------------------------- FMU state
- * A fixed header, then the ring and the segments. The design cache is not saved: a design is the
- * same numbers whenever it is made. */
+ * A fixed header, the ring, then each segment in flight: its scalars and its taps. The design
+ * cache is not saved: a design is the same numbers whenever it is made. */
 
 typedef struct {
     double mode[2], last;
@@ -225,7 +265,8 @@ typedef struct {
 } MfHeader;
 
 size_t mf_bytes(const ModeFollowing *mf) {
-    return sizeof(MfHeader) + ((size_t)mf->mask + 1) * sizeof(double) + (size_t)mf->count * sizeof(MfSegment);
+    return sizeof(MfHeader) + ((size_t)mf->mask + 1) * sizeof(double) + (size_t)mf->count * sizeof(MfSegment)
+           + (size_t)mf->taps_in_flight * sizeof(MfTap);
 }
 
 void mf_save(const ModeFollowing *mf, unsigned char *bytes) {
@@ -234,23 +275,33 @@ void mf_save(const ModeFollowing *mf, unsigned char *bytes) {
     header.mode[0] = mf->mode[0], header.mode[1] = mf->mode[1], header.last = mf->last;
     header.designs = mf->designs, header.k = mf->k, header.mask = mf->mask, header.count = mf->count;
     memcpy(bytes, &header, sizeof header);
-    memcpy(bytes + sizeof header, mf->ring, ((size_t)mf->mask + 1) * sizeof(double));
-    memcpy(bytes + sizeof header + ((size_t)mf->mask + 1) * sizeof(double), mf->segments,
-           (size_t)mf->count * sizeof(MfSegment));
+    unsigned char *at = bytes + sizeof header;
+    memcpy(at, mf->ring, ((size_t)mf->mask + 1) * sizeof(double));
+    at += ((size_t)mf->mask + 1) * sizeof(double);
+    for (long long m = 0; m < mf->count; m++) {
+        MfSegment g = *segment_at(mf, m);
+        const MfTap *taps = g.taps;
+        g.taps = NULL;
+        memcpy(at, &g, sizeof g);
+        memcpy(at + sizeof g, taps, (size_t)g.n_taps * sizeof(MfTap));
+        at += sizeof g + (size_t)g.n_taps * sizeof(MfTap);
+    }
 }
 
-/* A segment a run makes: taps at increasing delays below the ring's size, finite numbers; only the
- * last one open. */
-static int segment_valid(const MfSegment *segment, int last, long long k, long long ring) {
-    const MfTaps *taps = &segment->taps;
-    if (taps->count < 1 || taps->count > MF_MAX_TAPS || segment->open != last || (segment->moved != 0 && segment->moved != 1)
-        || segment->start < 0 || segment->start > k || !isfinite(segment->base) || !isfinite(segment->end_value)
-        || (!segment->open && (segment->end < segment->start - 1 || segment->end >= k)))
-        return 0;
-    for (int i = 0; i < taps->count; i++)
-        if (taps->delay[i] < (i ? taps->delay[i - 1] + 1 : 0) || !isfinite(taps->weight[i]) || taps->weight[i] == 0.0)
+/* A segment a run makes (the m-th of count at sample k, with a ring of ring samples): its taps are
+ * read and checked by taps_valid. Only the last one open. */
+static int segment_valid(const MfSegment *g, int last, long long k, long long ring) {
+    return g->n_taps >= 1 && g->n_taps <= MF_MAX_TAPS && g->open == last && (g->moved == 0 || g->moved == 1)
+           && g->start >= 0 && g->start <= k && (g->open || (g->end >= g->start - 1 && g->end < k))
+           && isfinite(g->base) && isfinite(g->end_value) && g->reach >= 1 && g->reach <= ring;
+}
+
+/* Taps at increasing delays from 0, finite non-zero weights, the last one reach - 1. */
+static int taps_valid(const MfTap *taps, long long n, long long reach) {
+    for (long long i = 0; i < n; i++)
+        if (taps[i].delay < (i ? taps[i - 1].delay + 1 : 0) || !isfinite(taps[i].weight) || taps[i].weight == 0.0)
             return 0;
-    return segment->reach == reach_of(taps) && segment->reach <= ring;
+    return taps[n - 1].delay + 1 == reach;
 }
 
 int mf_restore(ModeFollowing *mf, ModelInstance *inst, const unsigned char **at, const unsigned char *end) {
@@ -258,33 +309,44 @@ int mf_restore(ModeFollowing *mf, ModelInstance *inst, const unsigned char **at,
     if ((size_t)(end - *at) < sizeof header) return -1;
     memcpy(&header, *at, sizeof header);
     const long long ring = header.mask + 1;
-    if (ring < 1 || ring > MF_MAX_RING || (ring & header.mask) != 0 || header.count < 1 || header.count > MF_MAX_SEGMENTS
-        || header.k < 0 || header.designs < 1 || !(header.mode[0] > 0.0 && header.mode[0] < INFINITY)
-        || !(header.mode[1] >= 0.0 && header.mode[1] < 1.0) || !isfinite(header.last))
+    if (ring < 1 || ring > MF_MAX_RING || (ring & header.mask) != 0 || header.count < 1
+        || header.count > MF_MAX_TAPS_IN_FLIGHT || header.k < 0 || header.designs < 1
+        || !(header.mode[0] > 0.0 && header.mode[0] < INFINITY) || !(header.mode[1] >= 0.0 && header.mode[1] < 1.0)
+        || !isfinite(header.last)
+        || ((size_t)(end - *at) - sizeof header) / sizeof(double) < (size_t)ring
+        || ((size_t)(end - *at) - sizeof header - (size_t)ring * sizeof(double)) / sizeof(MfSegment) < (size_t)header.count)
         return -1;
-    const size_t bytes = sizeof header + (size_t)ring * sizeof(double) + (size_t)header.count * sizeof(MfSegment);
-    if ((size_t)(end - *at) < bytes) return -1;
+    const unsigned char *from = *at + sizeof header;
     mf->ring = model_allocate(inst, (size_t)ring, sizeof(double));
-    mf->segments = model_allocate(inst, (size_t)header.count, sizeof(MfSegment));
-    if (mf->ring == NULL || mf->segments == NULL) {
-        mf_free(mf, inst);
-        return -1;
-    }
-    memcpy(mf->ring, *at + sizeof header, (size_t)ring * sizeof(double));
-    memcpy(mf->segments, *at + sizeof header + (size_t)ring * sizeof(double), (size_t)header.count * sizeof(MfSegment));
-    mf->mask = header.mask, mf->count = mf->capacity = header.count;
-    for (long long s = 0; s < header.count; s++)
-        if (!segment_valid(&mf->segments[s], s == header.count - 1, header.k, ring)) {
-            mf_free(mf, inst);
-            return -1;
-        }
+    for (mf->capacity = 4; mf->capacity < header.count; mf->capacity *= 2) {}
+    mf->segments = model_allocate(inst, (size_t)mf->capacity, sizeof(MfSegment));
+    mf->head = mf->count = mf->taps_in_flight = 0;
+    if (mf->ring == NULL || mf->segments == NULL) goto refused;
+    mf->mask = header.mask;
+    memcpy(mf->ring, from, (size_t)ring * sizeof(double));
+    from += (size_t)ring * sizeof(double);
     for (long long j = 0; j < ring; j++)
-        if (!isfinite(mf->ring[j])) {
-            mf_free(mf, inst);
-            return -1;
-        }
+        if (!isfinite(mf->ring[j])) goto refused;
+    for (long long m = 0; m < header.count; m++) {
+        MfSegment g;
+        if ((size_t)(end - from) < sizeof g) goto refused;
+        memcpy(&g, from, sizeof g);
+        from += sizeof g;
+        if (!segment_valid(&g, m == header.count - 1, header.k, ring) || (size_t)(end - from) < (size_t)g.n_taps * sizeof(MfTap)
+            || mf->taps_in_flight + g.n_taps > MF_MAX_TAPS_IN_FLIGHT)
+            goto refused;
+        g.taps = model_allocate(inst, (size_t)g.n_taps, sizeof(MfTap));
+        if (g.taps == NULL) goto refused;
+        memcpy(g.taps, from, (size_t)g.n_taps * sizeof(MfTap));
+        from += (size_t)g.n_taps * sizeof(MfTap);
+        mf->segments[m] = g, mf->count = m + 1, mf->taps_in_flight += g.n_taps;
+        if (!taps_valid(g.taps, g.n_taps, g.reach)) goto refused;
+    }
     mf->mode[0] = header.mode[0], mf->mode[1] = header.mode[1], mf->last = header.last;
     mf->designs = header.designs, mf->k = header.k, mf->has_pending = 0;
-    *at += bytes;
+    *at = from;
     return 0;
+refused:
+    mf_free(mf, inst);
+    return -1;
 }
