@@ -19,6 +19,7 @@ from pathlib import Path
 
 import pytest
 from fmpy import read_model_description
+from support.fmpy_log import listening
 
 from shapefmu.fmi import build_fmu
 from shapefmu.fmi.native import build_plant_fmu, model_from_file
@@ -67,36 +68,7 @@ def test_random_call_sequences_never_crash_an_fmu(fmus, tmp_path, name, sequence
 
 # ------------------------------------------------------------------------- directed cases
 
-LOG2 = ctypes.CFUNCTYPE(None, c_void_p, c_char_p, c_int, c_char_p, c_char_p)
 LOG3 = ctypes.CFUNCTYPE(None, c_void_p, c_int, c_char_p, c_char_p)
-_libc = ctypes.CDLL(None)
-
-
-class Callbacks(ctypes.Structure):
-    _fields_ = [("logger", LOG2), ("allocateMemory", c_void_p), ("freeMemory", c_void_p),
-                ("stepFinished", c_void_p), ("componentEnvironment", c_void_p)]
-
-
-# fmpy's logger proxy calls one process-wide Python callback (the last registered): every host logs here.
-MESSAGES: list[str] = []
-_LOG2 = LOG2(lambda env, name, status, category, message: MESSAGES.append(message.decode()))
-
-
-@pytest.fixture(scope="module", autouse=True)
-def fmpys_logger_handed_back():
-    """Host routes fmpy's one native logger proxy (a process-wide slot) to MESSAGES; after this module
-    it points back at fmpy's printer, so that later tests read FMU messages from fmpy's output."""
-    yield
-    from fmpy.fmi2 import fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, printLogMessage
-    from fmpy.logging import addLoggerProxy
-
-    printer = fmi2CallbackFunctions()
-    printer.logger = fmi2CallbackLoggerTYPE(printLogMessage)
-    addLoggerProxy(byref(printer))
-    _HANDED_BACK.append(printer)  # the proxy calls this logger from now on: keep it alive
-
-
-_HANDED_BACK = []
 
 
 class Host:
@@ -108,17 +80,12 @@ class Host:
         identifier = self.description.coSimulation.modelIdentifier
         platform = "linux64" if version == 2 else "x86_64-linux"
         self.lib = ctypes.CDLL(str(folder / "binaries" / platform / f"{identifier}.so"))
-        self.messages = MESSAGES
-        MESSAGES.clear()
+        self.messages = messages = []  # the loggers hold the list, not the host
         self.folder = folder
         if version == 2:  # fmpy's proxy formats the C varargs message before it reaches Python
-            from fmpy.logging import addLoggerProxy
-
-            self.callbacks = Callbacks(_LOG2, ctypes.cast(_libc.calloc, c_void_p), ctypes.cast(_libc.free, c_void_p),
-                                       None, None)
-            addLoggerProxy(byref(self.callbacks))
+            self.callbacks = listening(lambda status, category, message: messages.append(message))
         else:
-            self.logger = LOG3(lambda env, status, category, message: self.messages.append(message.decode()))
+            self.logger = LOG3(lambda env, status, category, message: messages.append(message.decode()))
         self.vr = {v.name: v.valueReference for v in self.description.modelVariables}
 
     def __call__(self, name, *args):

@@ -16,6 +16,7 @@ from fmpy import extract, read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave
 from hostile_support import guarded
+from support.fmpy_log import listening
 
 from shapefmu.cosim import Master, simulate
 from shapefmu.fmi.ssp import System, read_ssp
@@ -53,9 +54,15 @@ def test_a_step_of_more_rk4_substeps_than_the_bound_is_refused(plant_fmus, tmp_p
     fmu = plant_fmus["pendulum"] if version == "2.0" else build_plant_fmu(model_from_file("pendulum"), tmp_path / "P3.fmu",
                                                                           fmi_version="3.0")
     messages = []
-    instance = instantiate_fmu(extract(str(fmu)), read_model_description(str(fmu)), fmi_type="CoSimulation",
-                               logger=lambda *args: messages.append(args[-1].decode()))
-    vr = {v.name: v.valueReference for v in read_model_description(str(fmu)).modelVariables}
+    description = read_model_description(str(fmu))
+    if version == "2.0":  # fmpy's logger proxy is one slot for the process: instantiate_fmu(logger=) would dangle in it
+        instance = FMU2Slave(guid=description.guid, unzipDirectory=extract(str(fmu)),
+                             modelIdentifier=description.coSimulation.modelIdentifier, instanceName="plant")
+        instance.instantiate(callbacks=listening(lambda status, category, message: messages.append(message)))
+    else:
+        instance = instantiate_fmu(extract(str(fmu)), description, fmi_type="CoSimulation",
+                                   logger=lambda environment, status, category, message: messages.append(message.decode()))
+    vr = {v.name: v.valueReference for v in description.modelVariables}
     if version == "2.0":
         instance.setupExperiment(startTime=0.0)
         instance.enterInitializationMode()

@@ -15,9 +15,10 @@ import numpy as np
 import pytest
 import scipy.linalg
 from support.fixtures_plants import LINEAR_PLANTS, MODELS
+from support.fmpy_log import listening
 from fmpy import extract, read_model_description, simulate_fmu
 from fmpy.fmi1 import FMICallException
-from fmpy.fmi2 import FMU2Model, FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, fmi2Error
+from fmpy.fmi2 import FMU2Model, FMU2Slave, fmi2Error
 from fmpy.validation import validate_fmu
 from scipy.integrate import solve_ivp
 
@@ -61,38 +62,17 @@ def zoh_reference(plant, steps, inputs, x0=None):
     return {name: np.array(ys)[:, i] for i, name in enumerate(plant.outputs)}, x
 
 
-# fmpy's logger proxy calls one process-wide Python callback (the last registered), so a callback
-# per instance would dangle once its instance is gone: one callback for the process, routed to the
-# instance's message list by componentEnvironment.
-_MESSAGES: dict[int, list] = {}
-
-
-def _log(environment, instance, status, category, message):
-    _MESSAGES.setdefault(environment or 0, []).append((status, category.decode(), message.decode()))
-
-
-_LOGGER = fmi2CallbackLoggerTYPE(_log)
-
-
 class Instance:
     """An fmpy instance of a plant FMU that records what the FMU logs."""
 
     def __init__(self, fmu, kind="CoSimulation", name="plant"):
         self.description = read_model_description(str(fmu))
         self.refs = {v.name: v.valueReference for v in self.description.modelVariables}
-        self.messages = []
+        self.messages = messages = []  # the sink holds the list, not the instance: it lives as long as the process
         cls = FMU2Slave if kind == "CoSimulation" else FMU2Model
         self.fmu = cls(guid=self.description.guid, unzipDirectory=extract(str(fmu)),
                        modelIdentifier=self.description.coSimulation.modelIdentifier, instanceName=name)
-        self.callbacks = fmi2CallbackFunctions()
-        self.callbacks.logger = _LOGGER
-        self.callbacks.componentEnvironment = id(self.messages)
-        _MESSAGES[id(self.messages)] = self.messages
-        self.callbacks.allocateMemory = fmpy_callbacks().allocateMemory
-        self.callbacks.freeMemory = fmpy_callbacks().freeMemory
-        from fmpy.logging import addLoggerProxy
-
-        addLoggerProxy(ctypes.byref(self.callbacks))
+        self.callbacks = listening(lambda status, category, message: messages.append((status, category, message)))
         self.fmu.instantiate(callbacks=self.callbacks)
 
     def start(self, start_values=None):
@@ -114,12 +94,6 @@ class Instance:
 
     def free(self):
         self.fmu.freeInstance()
-
-
-def fmpy_callbacks():
-    from fmpy.fmi2 import defaultCallbacks
-
-    return defaultCallbacks
 
 
 def run_steps(instance, outputs, steps, input_name=None, inputs=None, t0=0.0):

@@ -1,8 +1,9 @@
 """Ctrl-C and SIGTERM in every command: a clean exit with the shell's codes, never a traceback.
 
 ``main`` runs each command inside :func:`interrupts`: SIGTERM (``kill``, ``timeout``, a batch system
-ending a job) then raises KeyboardInterrupt as Ctrl-C does, so ``finally`` blocks and exit handlers
-run (temporary folders are removed) and the command ends with 130 (SIGINT) or 143 (SIGTERM).
+ending a job) then raises :class:`Interrupted`, a KeyboardInterrupt, as Ctrl-C does, so ``finally``
+blocks and exit handlers run (temporary folders are removed) and the command ends with 130 (SIGINT)
+or 143 (SIGTERM).
 ``deferred`` holds both signals off while a result file is written, so it is written whole.
 """
 
@@ -14,14 +15,21 @@ import signal
 SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
 
+class Interrupted(KeyboardInterrupt):
+    """What the handler raises: a subclass, never KeyboardInterrupt itself. CPython 3.11 marks a
+    KeyboardInterrupt of exactly that type escaping code that ``exec`` runs from a string (dataclasses
+    and namedtuple make their methods so, at import) as unhandled, and then ends the process by SIGINT
+    whatever ``main`` returned: a SIGTERM during an import ended -2, not 143."""
+
+
 @contextlib.contextmanager
 def interrupts():
-    """Ctrl-C and SIGTERM raise KeyboardInterrupt; yields the list of signals received."""
+    """Ctrl-C and SIGTERM raise :class:`Interrupted`; yields the list of signals received."""
     received = []
 
     def interrupt(signum, frame):
         received.append(signum)
-        raise KeyboardInterrupt
+        raise Interrupted
 
     with _handlers(interrupt):
         yield received
