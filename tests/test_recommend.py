@@ -7,10 +7,12 @@ measures, which tests/test_klipper_metrics.py checks against Klipper's own figur
 import json
 import math
 import re
+import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
 import pytest
+from fmpy import read_model_description
 from hostile_support import guarded
 
 from shapefmu.identification import firmware, identify, klipper
@@ -138,6 +140,18 @@ def test_json_holds_the_json_alone_with_plot_and_build(tmp_path):
     advice = json.loads(out)
     assert "impulse_times_s" in advice["pick"]  # what --build wrote: a Shaper's start values, or these impulses
     assert "wrote" in err and "plot written" in err and plot.exists() and fmu.exists()
+    # the JSON names the FMU --build wrote and its start values: the modelDescription's and the .ssv's
+    pick = advice["pick"]
+    assert read_model_description(str(fmu)).coSimulation.modelIdentifier == pick["fmu_model"]
+    written = {p.get("name"): float(p[0].get("value")) for p in ET.parse(fmu.with_suffix(".ssv")).getroot().iter(
+        "{http://ssp-standard.org/SSP1/SystemStructureParameterValues}Parameter")}
+    assert {name: written[name] for name in pick["fmu_start_values"]} == pick["fmu_start_values"]
+    if pick["fmu_model"] == "ImpulseTrain":  # its impulses, normalised to sum to 1
+        n = pick["fmu_start_values"]["n_impulses"]
+        total = math.fsum(pick["impulse_amplitudes"])
+        assert [written[f"impulse_time[{i}]"] for i in range(1, n + 1)] == pick["impulse_times_s"]
+        assert [written[f"impulse_amplitude[{i}]"] for i in range(1, n + 1)] == pytest.approx(
+            [a / total for a in pick["impulse_amplitudes"]], rel=1e-15)
 
 
 def test_a_damping_above_0_3_recommends_from_the_families_that_take_it():

@@ -222,19 +222,10 @@ def _build(pick, out: Path, *, python: bool, fmi_version: str = "2.0", top_hz: f
     from shapefmu.fmi.ssp import write_ssv
     from shapefmu.shapers.catalog import default_sampling_period
 
-    starts = dict(pick.fmu or {})
+    model, starts = pick.fmu_design()
     ts = default_sampling_period(pick.frequencies or (top_hz,))
-    if pick.fmu is None:
-        from shapefmu.fmi.kinds.impulse_train import train_start_values
-
-        total = math.fsum(pick.amplitudes)
-        model = "ImpulseTrain"
-        starts = {**train_start_values(pick.times, [a / total for a in pick.amplitudes]), "Ts": ts}
-    elif pick.family == "window":
-        model = "ShapeFilter"
-    else:
-        model = "Shaper"
-        starts = {"n": 1, "n_modes": 1, **starts, "Ts": ts}
+    # a window filter's taps are sampled at its own Ts, which it keeps
+    starts = {"n": 1, "n_modes": 1, **starts, "Ts": ts} if model == "Shaper" else {"Ts": ts, **starts}
     if python:
         if fmi_version != "2.0":
             raise ValueError(f"--fmi-version {fmi_version} needs the native FMU: the pythonfmu FMUs (--python) are "
