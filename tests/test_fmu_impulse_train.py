@@ -107,6 +107,31 @@ def test_recommend_build_writes_the_picked_train_as_an_impulse_train_that_shapes
     assert max(y) == pytest.approx(1.0) and y[-1] == pytest.approx(-0.4)  # the whole move, shaped
 
 
+@pytest.mark.parametrize("target", ["klipper", "rrf", "marlin"])
+def test_recommend_build_writes_the_shaper_a_firmware_runs(tmp_path, target):
+    """--build with --firmware klipper, rrf or marlin writes that firmware's pick (Klipper's: Klipper's own
+    pick as its calibrate_shaper.py prints it for the file, tests/data/klipper/klipper_figures.json); the
+    FMU shapes as the closed form of the pick's impulses, normalised to sum to 1."""
+    fmu = tmp_path / "Pick.fmu"
+    code, out, err = guarded(["recommend", RECORDING, "--axis", "x", "--firmware", target, "--json", "--build", fmu],
+                             seconds=600)
+    assert code == 0, err
+    pick = json.loads(out)["pick"]
+    assert pick["family"] in (target, "train") and pick["firmware_line"]
+    if target == "klipper":
+        figures = json.loads((TESTS / "data" / "klipper" / "klipper_figures.json").read_text())["files"]
+        klippers = figures[RECORDING.name]["pick"]
+        assert pick["shaper"] == klippers["name"] and pick["frequencies_hz"][0] == pytest.approx(klippers["freq"])
+    md = read_model_description(str(fmu))
+    assert md.modelName == pick["fmu_model"]
+    total = math.fsum(pick["impulse_amplitudes"])
+    ts = float(next(v.start for v in md.modelVariables if v.name == "Ts"))
+    t = ts * np.arange(1200)
+    np.testing.assert_allclose(shaped_in_fmpy(fmu, t), closed_form(pick["impulse_times_s"],
+                                                                   [a / total for a in pick["impulse_amplitudes"]],
+                                                                   t, ts), rtol=0, atol=1e-12)
+
+
 @pytest.mark.parametrize("build", ["pythonfmu", "native 2.0", "native 3.0"])
 def test_each_fmu_of_the_train_validates_and_shapes_as_the_closed_form(builds, train, build):
     times, amplitudes = train

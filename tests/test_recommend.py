@@ -167,7 +167,6 @@ def test_a_damping_above_0_3_recommends_from_the_families_that_take_it():
     (["--mode", "40", "--max-smoothing", "1e-300"], "max_smoothing (--max-smoothing) must be in [0.05, 10] mm"),
     (["--mode", "40", "--accel", "1e308"], "accel (--accel) must be in [1, 1e+06] mm/s^2, got 1e+308"),
     (["--mode", "40", "--filter-ts", "1e-300"], "ts (--filter-ts) must be in [1e-05, 0.01] s, got 1e-300"),
-    (["--mode", "40", "--firmware", "klipper", "--build", "x.fmu"], "--build writes an FMU"),
 ])
 def test_values_out_of_range_are_one_line_naming_them(argv, words, tmp_path):
     """Issue 34, item 4 (design side) and the Low item: no 'nan%' and no 'inf x the best'."""

@@ -105,8 +105,6 @@ def _cmd_recommend(args) -> int:
         raise ValueError("give recordings or --mode HZ[:ZETA] (one or more), not both and not neither")
     if args.schedule and args.mode:
         raise ValueError("--schedule makes its table from recordings, one per value: give recordings, not --mode")
-    if args.build and args.firmware != "fmu":
-        raise ValueError(f"--build writes an FMU, the fmu target: give --firmware fmu, not {args.firmware}")
     if args.build:  # the .ssv written beside the FMU, checked before the work as --build itself is
         from shapefmu.files import check_output
 
@@ -288,8 +286,9 @@ def register(commands) -> None:
     p.add_argument("--plot", metavar="PNG", type=output_file("plot"),
                    help="save the spectrum, its modes, the pick, Klipper's pick and three more")
     p.add_argument("--build", metavar="OUT.fmu", type=output_file(".fmu", what="FMU"),
-                   help="with --firmware fmu: write the pick as an FMU (native C), a Shaper or ShapeFilter where it "
-                        "is one of their designs, else an ImpulseTrain of its impulses, and OUT.ssv beside it")
+                   help="write the pick (for any --firmware: the shaper that firmware runs) as an FMU (native C), "
+                        "a Shaper or ShapeFilter where it is one of their designs, else an ImpulseTrain of its "
+                        "impulses, and OUT.ssv beside it")
     p.add_argument("--python", action="store_true", help="with --build: the pythonfmu FMU instead of the native one")
     p.add_argument("--fmi-version", choices=("2.0", "3.0"), default="2.0",
                    help="with --build: FMI version of the native FMU (default 2.0; 3.0: array parameters)")
