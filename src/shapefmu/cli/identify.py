@@ -136,7 +136,7 @@ def _cmd_recommend(args) -> int:
                        accel=args.accel, scv=args.scv, max_smoothing=args.max_smoothing, max_freq=max_freq,
                        ts=args.filter_ts, progress=_progress() if showing(args) else None)
     if args.json:
-        print(json.dumps(advice.to_json(), indent=2, allow_nan=False))
+        print(json.dumps(_json(advice), indent=2, allow_nan=False))
     else:
         _print_table(advice, len(spectra) if args.recording else 0)
     if args.plot:
@@ -211,6 +211,29 @@ def _print_table(advice, recordings: int) -> None:
               "--impulses) takes them: " + ",".join(f"{t!r}:{a!r}" for t, a in zip(pick.times, pick.amplitudes)))
 
 
+def _fmu_design(candidate) -> tuple[str, dict] | tuple[None, None]:
+    """(FMU model, start values but ``Ts``) that runs a judged design: the Shaper or ShapeFilter that
+    designs it, else an ImpulseTrain of its impulses normalised to sum to 1, as Klipper applies its
+    shapers; (None, None) for a sampled filter's taps that no ShapeFilter designs."""
+    if candidate.fmu is not None:
+        return ("ShapeFilter" if candidate.family == "window" else "Shaper"), dict(candidate.fmu)
+    if candidate.ts is not None:
+        return None, None
+    from shapefmu.fmi.kinds.impulse_train import train_start_values
+
+    total = math.fsum(candidate.amplitudes)
+    return "ImpulseTrain", train_start_values(candidate.times, [a / total for a in candidate.amplitudes])
+
+
+def _json(advice) -> dict:
+    """The recommendation's JSON with the FMU that runs each design and its start values."""
+    out = advice.to_json()
+    for row, candidate in zip([out["pick"], out["klipper_pick"], *out["candidates"]],
+                              [advice.pick, advice.klipper_pick, *advice.candidates]):
+        row["fmu_model"], row["fmu_start_values"] = _fmu_design(candidate)
+    return out
+
+
 def _build(pick, out: Path, *, python: bool, fmi_version: str = "2.0", top_hz: float) -> list[Path]:
     """The pick as a Shaper or ShapeFilter FMU where one designs it, else as an ImpulseTrain FMU of its
     impulses (normalised to sum to 1, as Klipper applies its shapers); sampled at the default period of
@@ -220,7 +243,7 @@ def _build(pick, out: Path, *, python: bool, fmi_version: str = "2.0", top_hz: f
     from shapefmu.fmi.ssp import write_ssv
     from shapefmu.shapers.catalog import default_sampling_period
 
-    model, starts = pick.fmu_design()
+    model, starts = _fmu_design(pick)
     ts = default_sampling_period(pick.frequencies or (top_hz,))
     # a window filter's taps are sampled at its own Ts, which it keeps
     starts = {"n": 1, "n_modes": 1, **starts, "Ts": ts} if model == "Shaper" else {"Ts": ts, **starts}

@@ -10,7 +10,6 @@ under max / 20.
 from __future__ import annotations
 
 import dataclasses
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -25,9 +24,8 @@ class Candidate:
     ``zetas`` it was designed for, Klipper's ``vibration`` (share), ``smoothing`` (mm), ``max_accel``
     (mm/s^2) and ``score``, our ``at_modes``, its ``duration`` (s), its impulses (``ts`` set for a
     sampled filter, whose impulses are its taps), the firmware ``line`` that runs it, the start values
-    of the Shaper or ShapeFilter FMU that designs it (``fmu``, None when none does: an ImpulseTrain FMU
-    then runs its impulses, see :meth:`fmu_design`) and whether it passes the guards of ``recommend``
-    (``guarded``)."""
+    of the Shaper or ShapeFilter FMU that runs it (``fmu``, None when no FMU kind holds it) and whether it
+    passes the guards of ``recommend`` (``guarded``)."""
 
     kind: str
     family: str
@@ -77,25 +75,6 @@ class Candidate:
         """
         return self.vibration <= other.vibration and self.max_accel >= other.max_accel
 
-    def fmu_design(self) -> tuple[str, dict] | None:
-        """(FMU model, start values but ``Ts``) that runs this design: the Shaper or ShapeFilter that
-        designs it, else an ImpulseTrain of its impulses, normalised to sum to 1 as Klipper applies its
-        shapers; None for a sampled filter's taps that no ShapeFilter designs.
-
-        >>> zv = Candidate("zv", "klipper", (40.0,), (0.0,), 0.12, 0.1, 6000.0, 1e-3, 0.0, 0.0125,
-        ...                (0.0, 0.0125), (1.0, 1.0))
-        >>> zv.fmu_design()
-        ('ImpulseTrain', {'n_impulses': 2, 'impulse_time[1]': 0.0, 'impulse_amplitude[1]': 0.5, 'impulse_time[2]': 0.0125, 'impulse_amplitude[2]': 0.5})
-        """
-        if self.fmu is not None:
-            return ("ShapeFilter" if self.family == "window" else "Shaper"), dict(self.fmu)
-        if self.ts is not None:
-            return None
-        from shapefmu.fmi.kinds.impulse_train import train_start_values
-
-        total = math.fsum(self.amplitudes)
-        return "ImpulseTrain", train_start_values(self.times, [a / total for a in self.amplitudes])
-
     def row(self) -> dict:
         """The JSON row: measures, impulses (or taps and ts) and the firmware line.
 
@@ -104,15 +83,13 @@ class Candidate:
         >>> zv.row()["impulse_times_s"], zv.row()["impulse_amplitudes"], zv.row()["firmware_line"]
         ([0.0, 0.0125], [0.5, 0.5], None)
         """
-        design = self.fmu_design()
         shape = ({"taps": list(self.amplitudes), "ts": self.ts} if self.ts is not None
                  else {"impulse_times_s": list(self.times), "impulse_amplitudes": list(self.amplitudes)})
         return {"shaper": self.label, "family": self.family, "frequencies_hz": list(self.frequencies),
                 "zetas": list(self.zetas), "vibration": self.vibration, "smoothing_mm": self.smoothing,
                 "max_accel": self.max_accel, "score": self.score, "ours_residual_at_modes": self.at_modes,
                 "duration_s": self.duration, **shape, "firmware_line": self.line,
-                "fmu_model": design[0] if design else None, "fmu_start_values": design[1] if design else None,
-                "passes_guards": self.guarded}
+                "passes_guards": self.guarded}  # the CLI adds the FMU that runs it (fmi is a layer above)
 
 
 class Judge:

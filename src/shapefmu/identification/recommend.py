@@ -65,7 +65,8 @@ class Recommendation:
     designs_scored: int
 
     def to_json(self) -> dict:
-        """The recommendation as ``--json`` prints it (``recommend``'s example shows its keys)."""
+        """The recommendation as ``--json`` prints it (``recommend``'s example shows its keys), but the FMU
+        that runs each design, which the command adds."""
         return {"firmware": self.firmware, "pick": self.pick.row(), "klipper_pick": self.klipper_pick.row(),
                 "verdict": self.verdict, "candidates": [c.row() for c in self.candidates],
                 "left_out": list(self.left_out),
