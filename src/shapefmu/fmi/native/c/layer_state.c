@@ -138,12 +138,8 @@ ModelStatus core_get_state(ModelInstance *inst, void **FMUstate, const char *fun
     return MODEL_OK;
 }
 
-ModelStatus core_set_state(ModelInstance *inst, const void *FMUstate, const char *function) {
-    if (FMUstate == NULL) return model_fail(inst, "%s: FMUstate is NULL", function);
-    const Snapshot *s = FMUstate;
-    if (!ours(inst, s))
-        return model_fail(inst, "%s: the state is not one of this FMU (another FMU's, or no state at all)", function);
-    if (check_values(inst, s, function) != MODEL_OK) return MODEL_ERROR;
+/* Back to snapshot s, whose values are known to be valid. */
+static ModelStatus restore(ModelInstance *inst, const Snapshot *s, const char *function) {
     copy_values(inst, inst->reals, inst->integers, inst->booleans, inst->strings, s->reals, s->integers, s->booleans,
                 s->strings);
     inst->time = s->time;
@@ -154,6 +150,15 @@ ModelStatus core_set_state(ModelInstance *inst, const void *FMUstate, const char
     if (model_restore_state(inst, s->model, s->model_size, function) != 0)
         return model_fail(inst, "%s: the state does not fit this instance's model data", function);
     return MODEL_OK;
+}
+
+ModelStatus core_set_state(ModelInstance *inst, const void *FMUstate, const char *function) {
+    if (FMUstate == NULL) return model_fail(inst, "%s: FMUstate is NULL", function);
+    const Snapshot *s = FMUstate;
+    if (!ours(inst, s))
+        return model_fail(inst, "%s: the state is not one of this FMU (another FMU's, or no state at all)", function);
+    if (check_values(inst, s, function) != MODEL_OK) return MODEL_ERROR;
+    return restore(inst, s, function);
 }
 
 ModelStatus core_free_state(ModelInstance *inst, void **FMUstate, const char *function) {
@@ -257,4 +262,46 @@ ModelStatus core_deserialize(ModelInstance *inst, const unsigned char serialized
     for (size_t i = 0; i < info->n_string; i++) s->strings[i * (inst->info.string_capacity + 1) + inst->info.string_capacity] = '\0';
     *FMUstate = s;
     return MODEL_OK;
+}
+
+/* ---------------------------------------------------------------- Initialization Mode's outputs */
+
+/* FMI 2.0 (section 2.2.7, initial="calculated") and FMI 3.0 (Initialization Mode, section 2.3) let a host get a computed
+ * variable in Initialization Mode, computed from the parameters and inputs set so far; a master
+ * propagating values before the first step passes them on. They are what the exit of initialisation
+ * makes them: the instance is saved, the model part's exit run, its computed values kept and the rest
+ * restored, so the exit still starts the run and a later set still changes what the next get gives.
+ * Parameters the exit would refuse leave the computed values at their start values, with a debug
+ * message only: the refusal, logged as an error, stays at the exit, where a host expects it and where
+ * a parameter set one at a time is complete. */
+ModelStatus core_preview_initialization(ModelInstance *inst, const char *function) {
+    if (inst->mode != MODE_INITIALIZATION || model_part.exit_initialization == NULL) return MODEL_OK;
+    void *before = NULL;
+    if (core_get_state(inst, &before, function) != MODEL_OK) return MODEL_ERROR;
+    Snapshot *computed = new_snapshot(inst, 0);
+    if (computed == NULL) {
+        core_free_state(inst, &before, function);
+        return model_fail(inst, "%s: out of memory", function);
+    }
+    inst->previewing = 1;
+    if (model_part.exit_initialization(inst, function) != MODEL_OK) model_reset(inst);
+    inst->previewing = 0;
+    copy_values(inst, computed->reals, computed->integers, computed->booleans, computed->strings, inst->reals,
+                inst->integers, inst->booleans, inst->strings);
+    const ModelStatus status = restore(inst, before, function);
+    core_free_state(inst, &before, function);
+    const ValueType types[3] = {TYPE_REAL, TYPE_INTEGER, TYPE_BOOLEAN};
+    for (int t = 0; t < 3 && status == MODEL_OK; t++) {
+        size_t first, count;
+        core_type_range(inst, types[t], &first, &count);
+        for (size_t slot = first; slot < first + count; slot++) {
+            const char *name;
+            if (model_variable(inst, types[t], slot, &name) != ROLE_COMPUTED) continue;
+            if (types[t] == TYPE_REAL) inst->reals[slot] = computed->reals[slot];
+            else core_integer_values(inst, types[t])[slot - first] =
+                (types[t] == TYPE_INTEGER ? computed->integers : computed->booleans)[slot - first];
+        }
+    }
+    free_snapshot(inst, computed);
+    return status;
 }
