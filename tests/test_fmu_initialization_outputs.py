@@ -20,6 +20,7 @@ from fmpy.fmi1 import FMICallException
 from support import MODELS
 from support.fixtures_fmi import TRAIN_STARTS
 from support.fixtures_native import FILTERS, TWO_MODES, shaper_starts
+from support.valgrind import requires_valgrind, run_driver_under_valgrind
 
 # A hold table whose value at t0 = 0 is its "before" value.
 TABLE = json.dumps({"kind": "signal_table", "interpolation": "hold", "before": 5.0, "time": [0.0005], "value": [0.0]})
@@ -188,3 +189,9 @@ def test_player_to_shaper_gives_the_first_impulse_of_the_player_at_t0_in_our_mas
         signal = np.array([(0.0, 5.0), (0.01, 5.0)], dtype=[("time", float), ("u", float)])
         fmpy_result = simulate_fmu(str(shaper), stop_time=0.01, output_interval=1e-3, input=signal, output=["y"])
         assert fmpy_result["y"][0] == pytest.approx(expected, rel=1e-12)
+
+
+@requires_valgrind
+@pytest.mark.parametrize("name", [*CASES, "plant"])
+def test_outputs_got_in_initialization_mode_leave_no_error_and_no_leak_under_valgrind(fmus, name, tmp_path):
+    run_driver_under_valgrind(fmus[(name, "native 2.0")], "valgrind_initialization", tmp_path)
