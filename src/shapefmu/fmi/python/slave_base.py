@@ -81,7 +81,7 @@ class Fmi2Slave:
         self.phase = "instantiated"
         self.time = 0.0
         self._input_names = [v.name for v in self.variables if v.causality == "input"]
-        self._calculated_names = [v.name for v in self.variables if v.causality in ("output", "local")]
+        self._output_names = [v.name for v in self.variables if v.causality == "output"]
         self.guid = ""
         self.declared_dependencies = None
         if resources:
@@ -203,19 +203,19 @@ class Fmi2Slave:
         self.phase = "terminated"
 
     def _initial_values(self):
-        """The values with the outputs (and calculated locals) that fmi2ExitInitializationMode would give
-        from the parameters and inputs set so far, computed by a model of their own so that nothing is
-        committed: FMI 2.0 (section 2.2.7, initial="calculated") lets a host get them in
-        initialization mode, and a master propagating values before the first step passes them on.
-        Parameters the exit would refuse leave the start values (no message): the refusal stays at the
-        exit, where a host expects it and where parameters set one at a time are complete."""
+        """The values, with the outputs fmi2ExitInitializationMode would give from the parameters and
+        inputs set so far, computed by a model of their own so that nothing is committed: FMI 2.0
+        (section 2.2.7, initial="calculated") lets a host get them in initialization mode, and a master
+        propagating values before the first step passes them on. Parameters the exit would refuse leave
+        the start values (no message): the refusal stays at the exit, where a host expects it and where
+        parameters set one at a time are complete."""
         preview = self.model_class(dict(self.values), self.model.owner)
         preview.time = self.time
         try:
             preview.initialize()
         except Exception:  # noqa: BLE001 - see the docstring: refused at the exit, with its message
             return self.values
-        return self.values | {name: preview.values[name] for name in self._calculated_names}
+        return self.values | {name: preview.values[name] for name in self._output_names}
 
     def _get(self, vrs, type_):
         table = self._by_type[type_]
