@@ -160,8 +160,9 @@ def fmu_loop_run(schedule: Schedule, commands, values):
     at the step's start, so its first committed sample is the command at t1 and the one at t = 0 (the first
     move's 5 m/s^2) never enters its delay line, the rest u0 = 0 in its place: rows 33 and 34, where that
     sample's delayed impulse is due, differ from the design layer's, and the first move's residual is 0.49 %
-    against the design layer's 0.050 % (measured with the defaults); every other row is the design layer's
-    to rounding."""
+    against the design layer's 0.050 % (measured with the defaults), as row 0 is counted held over the first
+    sample, which the bed, stepped on rows 1 on, never gets (its motion is the same, to the bit, as when row
+    0 was 0, and that move's residual then 0.050 %); every other row is the design layer's to rounding."""
     from shapefmu.cosim.master import simulate
     from shapefmu.fmi import build_fmu
     from shapefmu.fmi.kinds.scheduled_shaper import schedule_start_values
