@@ -37,7 +37,7 @@ CASES = {
     "scheduled shaper": ("ScheduledShaper", {}),
 }
 FLAVOURS = ("pythonfmu", "native 2.0", "native 3.0")
-INPUT = 0.75  # every Real input, set in Initialization Mode (inside every kind's valid range)
+INPUT = 0.75  # every input, set in Initialization Mode (inside every kind's valid range)
 
 
 @pytest.fixture(scope="module")
@@ -98,10 +98,10 @@ class Initializing:
 
 
 def _set_inputs(fmu):
-    """An instance in Initialization Mode with every Real input at INPUT, every Boolean one true."""
+    """An instance in Initialization Mode with every input (all are Real) at INPUT."""
     instance = Initializing(fmu)
     for name in instance.names("input"):
-        instance.set(name, True if instance.variables[name].type == "Boolean" else INPUT)
+        instance.set(name, INPUT)
     return instance
 
 
@@ -168,7 +168,7 @@ def test_parameters_the_exit_would_refuse_are_refused_at_the_exit_not_by_a_get(f
     assert "Ts = 1e-09" in capfd.readouterr().out
 
 
-def test_player_to_shaper_gives_the_first_impulse_of_the_player_at_t0_in_our_master_and_in_fmpy(builds, tmp_path):
+def test_player_to_shaper_gives_the_first_impulse_of_the_player_at_t0_in_our_master_and_in_fmpy(builds):
     """Our master propagates values in Initialization Mode: the shaper's output recorded at t = 0 is a_1
     times the player's value there, as fmpy's simulate_fmu gives with the player's value as input."""
     from fmpy import simulate_fmu
