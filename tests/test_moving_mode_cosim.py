@@ -20,8 +20,8 @@ from shapefmu.plants import load_scheduled
 FS = 1.0 / TS
 MOVES = 8
 # One move: 20 ms at 5 m/s^2, 100 ms coasting, 20 ms braking, 200 ms at rest (benchmarks/moving_mode.py),
-# after 5 ms at rest: the master passes the players' outputs on from its first step, so the command at
-# t = 0 is the inputs' start value, 0.
+# after 5 ms at rest: Gauss-Seidel hands the shaper the players' values at the end of each step, so the
+# command at t = 0 reaches the bed (passed on in Initialization Mode) but never the shaper's delay line.
 ONE = np.concatenate([np.zeros(10), np.full(40, 5.0), np.zeros(200), np.full(40, -5.0), np.zeros(390)])
 LOADS = np.linspace(0.0, 300.0, MOVES)
 

@@ -17,6 +17,8 @@ its model (``model_class``) computes. What the slave guarantees for every kind:
   escaping exception with fmi2Fatal and releases the instance's Python objects twice (the front
   end then stops forwarding to it, at the cost of a small leak);
 - parameters are validated at the exit of initialisation (``Model.initialize``), where the design runs;
+- an output got in initialization mode is what the exit would make it from the values set so far
+  (``_initial_values``); parameters the exit would refuse leave it at its start value;
 - NaN / inf inputs make the next ``fmi2DoStep`` fail with fmi2Error, leaving the state untouched;
 - ``fmi2GetFMUstate`` / ``fmi2SetFMUstate`` and serialisation restore exactly: all variables, the
   time, the phase, and the kernel objects named in the model's ``state_attributes`` (ring buffers,
@@ -79,6 +81,7 @@ class Fmi2Slave:
         self.phase = "instantiated"
         self.time = 0.0
         self._input_names = [v.name for v in self.variables if v.causality == "input"]
+        self._output_names = [v.name for v in self.variables if v.causality == "output"]
         self.guid = ""
         self.declared_dependencies = None
         if resources:
@@ -199,9 +202,24 @@ class Fmi2Slave:
             return
         self.phase = "terminated"
 
+    def _initial_values(self):
+        """The values, with the outputs fmi2ExitInitializationMode would give from the parameters and
+        inputs set so far, computed by a model of their own so that nothing is committed: FMI 2.0
+        (section 2.2.7, initial="calculated") lets a host get them in initialization mode, and a master
+        propagating values before the first step passes them on. Parameters the exit would refuse leave
+        the start values (no message): the refusal stays at the exit, where a host expects it and where
+        parameters set one at a time are complete."""
+        preview = self.model_class(dict(self.values), self.model.owner)
+        preview.time = self.time
+        try:
+            preview.initialize()
+        except Exception:  # noqa: BLE001 - see the docstring: refused at the exit, with its message
+            return self.values
+        return self.values | {name: preview.values[name] for name in self._output_names}
+
     def _get(self, vrs, type_):
         table = self._by_type[type_]
-        values = self.values
+        values = self._initial_values() if self.phase == "initialization" else self.values
         try:
             return [values[table[vr].name] for vr in vrs]
         except KeyError:

@@ -159,7 +159,7 @@ static fmi2Status check_references(ModelInstance *inst, ValueType type, const fm
     REQUIRE_ARRAY(vr, nvr, function);                                                               \
     REQUIRE_ARRAY(value, nvr, function);                                                            \
     if (check_references(inst, type, vr, nvr, function) != fmi2OK) return fmi2Error;               \
-    if (inst->mode != MODE_ERROR && model_update(inst, function) != MODEL_OK) return fmi2Error
+    if (core_prepare_get(inst, function) != MODEL_OK) return fmi2Error
 
 fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Real value[]) {
     GET_PROLOGUE(TYPE_REAL, "fmi2GetReal");

@@ -307,7 +307,7 @@ static int scalars_only(const Fmi3Layer *layer, ValueType type, const fmi3ValueR
     const Fmi3Layer *layer = layer_of(inst);                                                        \
     const int fast = scalars_only(layer, type, vr, nvr, nValues);                                   \
     if (!fast && check_request(inst, type, vr, nvr, nValues, 1, function) != fmi3OK) return fmi3Error; \
-    if (inst->mode != MODE_ERROR && model_update(inst, function) != MODEL_OK) return fmi3Error; \
+    if (core_prepare_get(inst, function) != MODEL_OK) return fmi3Error; \
     size_t next = 0
 
 #define SET_PROLOGUE(type, function)                                                                \

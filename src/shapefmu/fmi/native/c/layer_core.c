@@ -34,9 +34,15 @@ static void log_message(const ModelInstance *inst, int error, const char *catego
 ModelStatus model_fail(ModelInstance *inst, const char *format, ...) {
     va_list args;
     va_start(args, format);
-    log_message(inst, 1, "logStatusError", format, args); /* an error is never debug output */
+    if (inst->previewing) {
+        /* parameters refused while Initialization Mode's outputs are computed: the exit of
+         * initialisation refuses them (core_preview_initialization) */
+        if (inst->logging_on) log_message(inst, 0, "logAll", format, args);
+    } else {
+        log_message(inst, 1, "logStatusError", format, args); /* an error is never debug output */
+        inst->mode = MODE_ERROR;
+    }
     va_end(args);
-    inst->mode = MODE_ERROR;
     return MODEL_ERROR;
 }
 
@@ -121,6 +127,12 @@ ModelStatus model_check_string(ModelInstance *inst, size_t vr, const char *value
 
 ModelStatus model_update(ModelInstance *inst, const char *function) {
     return model_part.update != NULL ? model_part.update(inst, function) : MODEL_OK;
+}
+
+ModelStatus core_prepare_get(ModelInstance *inst, const char *function) {
+    if (inst->mode == MODE_ERROR) return MODEL_OK;
+    if (core_preview_initialization(inst, function) != MODEL_OK) return MODEL_ERROR;
+    return model_update(inst, function);
 }
 
 size_t model_state_size(const ModelInstance *inst) {

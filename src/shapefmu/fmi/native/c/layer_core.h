@@ -46,6 +46,9 @@ ModelStatus model_check_real(ModelInstance *inst, size_t vr, double value, const
 ModelStatus model_check_integer(ModelInstance *inst, size_t vr, int value, const char *function);
 ModelStatus model_check_string(ModelInstance *inst, size_t vr, const char *value, const char *function);
 ModelStatus model_update(ModelInstance *inst, const char *function);
+/* Make the values a get call reads current (none in the error state): Initialization Mode's
+ * outputs (core_preview_initialization), then model_update. */
+ModelStatus core_prepare_get(ModelInstance *inst, const char *function);
 size_t model_state_size(const ModelInstance *inst);
 void model_save_state(const ModelInstance *inst, unsigned char *bytes);
 int model_restore_state(ModelInstance *inst, const unsigned char *bytes, size_t size, const char *function);
@@ -102,6 +105,9 @@ ModelStatus core_directional_derivative(ModelInstance *inst, const unsigned int 
 ModelStatus core_get_state(ModelInstance *inst, void **state, const char *function);
 ModelStatus core_set_state(ModelInstance *inst, const void *state, const char *function);
 ModelStatus core_free_state(ModelInstance *inst, void **state, const char *function);
+/* In Initialization Mode, the computed values made what the exit of initialisation would make them
+ * from the values set so far, nothing else changed; a no-op in any other mode. */
+ModelStatus core_preview_initialization(ModelInstance *inst, const char *function);
 ModelStatus core_serialized_size(ModelInstance *inst, const void *state, size_t *size, const char *function);
 ModelStatus core_serialize(ModelInstance *inst, const void *state, unsigned char bytes[], size_t size,
                           const char *function);

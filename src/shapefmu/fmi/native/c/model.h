@@ -76,6 +76,7 @@ typedef struct ModelInstance {
     int *integers, *booleans;
     char *strings;               /* n_string slots of info.string_capacity + 1 characters */
     void *model;                 /* the model part's own data */
+    int previewing;              /* computing Initialization Mode's outputs (layer_state.c): a refusal is not an error yet */
     /* the layer's: the host's allocator (FMI 2.0) or the C library's (FMI 3.0), the logger that
      * reaches the host, and the layer's own data (its host callbacks, FMI 3.0's variable table) */
     void *(*allocate)(size_t count, size_t size);
