@@ -10,7 +10,7 @@ Two hazards live in every process that hosts our pythonfmu-based FMUs (fmpy, the
 - fmpy's logger proxy (``fmpy.logging.addLoggerProxy``) formats the C message and then calls ONE
   process-wide Python callback, the last one registered. A host that registers a callback per
   instance and lets it die leaves every later FMU that logs through fmpy calling freed memory; the
-  master (``shapefmu.cosim.units``) must keep its callback alive for the process.
+  master and the test hosts register one router that lives as long as the process (``shapefmu.cosim.fmpy_log``).
 - pythonfmu 0.7.0 answers a Python exception escaping the slave with fmi2Fatal and releases the
   instance's Python objects then and again at fmi2FreeInstance; and its library destructor writes
   into a std::shared_ptr that the C++ exit handlers have already freed. The FMUs' C front end

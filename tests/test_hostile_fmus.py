@@ -19,8 +19,8 @@ from pathlib import Path
 
 import pytest
 from fmpy import read_model_description
-from support.fmpy_log import listening
 
+from shapefmu.cosim.fmpy_log import listening
 from shapefmu.fmi import build_fmu
 from shapefmu.fmi.native import build_plant_fmu, model_from_file
 from shapefmu.fmi.native.sampled import build_native_fmu

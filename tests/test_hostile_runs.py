@@ -16,9 +16,9 @@ from fmpy import extract, read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave
 from hostile_support import guarded
-from support.fmpy_log import listening
 
 from shapefmu.cosim import Master, simulate
+from shapefmu.cosim.fmpy_log import listening
 from shapefmu.fmi.ssp import System, read_ssp
 from shapefmu.runtime import limits
 

@@ -15,13 +15,13 @@ import numpy as np
 import pytest
 import scipy.linalg
 from support.fixtures_plants import LINEAR_PLANTS, MODELS
-from support.fmpy_log import listening
 from fmpy import extract, read_model_description, simulate_fmu
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Model, FMU2Slave, fmi2Error
 from fmpy.validation import validate_fmu
 from scipy.integrate import solve_ivp
 
+from shapefmu.cosim.fmpy_log import listening
 from shapefmu.plants import load, loads
 
 # Horizons: a few periods of each plant's slowest flexible mode; CS step: well below its fastest.

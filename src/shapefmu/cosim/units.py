@@ -29,41 +29,13 @@ import math
 from ctypes import byref, c_double, c_int, c_size_t, c_uint, c_void_p
 from pathlib import Path
 
-from fmpy import calloc, free
-from fmpy.fmi2 import (
-    FMU2Model,
-    FMU2Slave,
-    fmi2CallbackAllocateMemoryTYPE,
-    fmi2CallbackFreeMemoryTYPE,
-    fmi2CallbackFunctions,
-    fmi2CallbackLoggerTYPE,
-    fmi2FMUstate,
-)
-from fmpy.fmi1 import printLogMessage
+from fmpy.fmi2 import FMU2Model, FMU2Slave, fmi2FMUstate
 
+from shapefmu.cosim import fmpy_log
 from shapefmu.cosim.types import (FAMILIES_2, Family, array_size, array_values, enumeration_items, family_of, kind_of,
                                   split_element, typed_value)
 
 STATUS_NAMES = {0: "fmi2OK", 1: "fmi2Warning", 2: "fmi2Discard", 3: "fmi2Error", 4: "fmi2Fatal", 5: "fmi2Pending"}
-
-# fmpy's logger proxy (fmpy.logging.addLoggerProxy) formats an FMU's C varargs message and then calls
-# ONE process-wide Python callback: the last one registered, whichever instance logs. A callback
-# registered per unit dies with its unit, and the next FMU in the process that logs through the
-# proxy (fmpy's own default callbacks included) calls freed memory: a segfault. The master registers
-# one callback that lives as long as the process and finds the unit's queue by componentEnvironment;
-# a message from an instance that is not the master's is printed, as fmpy's default logger does.
-_MESSAGE_QUEUES: dict[int, collections.deque] = {}
-
-
-def _log_to_queue(environment, instance, status, category, message):
-    queue = _MESSAGE_QUEUES.get(environment or 0)
-    if queue is None:
-        printLogMessage(environment, instance, status, category, message)
-    else:
-        queue.append(f"[{STATUS_NAMES.get(status, status)}] {(message or b'').decode(errors='replace')}")
-
-
-_LOGGER = fmi2CallbackLoggerTYPE(_log_to_queue)
 
 
 class FMUFailure(Exception):
@@ -127,7 +99,7 @@ class Unit:
     family_table = FAMILIES_2
     terminated_at: float | None = None  # set when the FMU asks to end the simulation
     state_calls = ("fmi2GetFMUstate", "fmi2SetFMUstate", "fmi2FreeFMUstate")  # FMI 3.0 spells them FMUState
-    queues = _MESSAGE_QUEUES  # where the process-wide logger finds this unit's messages
+    queues = fmpy_log.SINKS  # where the process-wide logger finds this unit's messages
 
     def __init__(self, name: str, fmu_path: Path, unzip_directory: str, description):
         self._name_it(name, fmu_path, description)
@@ -163,19 +135,12 @@ class Unit:
         return getattr(self.description, "modelExchange" if self.interface == "ModelExchange" else "coSimulation")
 
     def _make_callbacks(self):
-        callbacks = fmi2CallbackFunctions()
-        callbacks.logger = _LOGGER
-        callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
-        callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
-        callbacks.componentEnvironment = id(self.messages)  # registered until free()
-        _MESSAGE_QUEUES[id(self.messages)] = self.messages
-        try:  # formats the C varargs message before it reaches Python
-            from fmpy.logging import addLoggerProxy
-
-            addLoggerProxy(byref(callbacks))
-        except Exception:  # noqa: BLE001 - without the proxy messages arrive unformatted, still useful
-            pass
-        return callbacks
+        """Callbacks routing this instance's messages into its queue (``fmpy_log``: fmpy's proxy is one
+        slot per process), registered until free()."""
+        messages = self.messages
+        return fmpy_log.listening(
+            lambda status, category, text: messages.append(f"[{STATUS_NAMES.get(status, status)}] {text}"),
+            id(messages))
 
     def variable(self, name: str):
         variable = self.variables.get(name)
